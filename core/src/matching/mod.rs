@@ -1,1 +1,1 @@
-//! TODO
+//! Brute-force matching and the lab's strategies (being written).

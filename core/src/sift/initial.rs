@@ -1,0 +1,74 @@
+//! `createInitialImage` with doubleImageSize = true (spec §2).
+
+use super::blur::gaussian_blur;
+use super::image::Plane;
+use crate::image::GrayImage;
+
+/// The pyramid base: the gray image as float, upsampled ×2 bilinearly, then
+/// blurred from the assumed camera blur 0.5 (doubled: 1.0) up to σ = 1.6.
+pub fn initial_image(img: &GrayImage, sigma: f64) -> Plane {
+    let s = sigma as f32;
+    // Evaluated in f32 without FMA, as sift.dispatch.cpp is compiled for the
+    // SSE3 baseline: 1.6f*1.6f rounds to 2.5600002f.
+    let sig_diff = (s * s - 0.5f32 * 0.5f32 * 4.0f32).max(0.01f32).sqrt();
+    let up = upsample2x(img);
+    gaussian_blur(&up, sig_diff as f64)
+}
+
+/// INTER_LINEAR ×2 with the pixel-centre convention. Source coordinate of
+/// destination t is (t + 0.5)/2 − 0.5, so weights are (0.25, 0.75) with edge
+/// replication. All values are multiples of 1/16 below 256, so this is exact
+/// whatever implementation OpenCV dispatches to (IPP included).
+fn upsample2x(img: &GrayImage) -> Plane {
+    let (w, h) = (img.width(), img.height());
+    let (w2, h2) = (2 * w, 2 * h);
+    let taps = |t: usize, n: usize| -> (usize, usize, f32) {
+        // (left, right, weight of right)
+        let m = t / 2;
+        if t % 2 == 0 {
+            if m == 0 { (0, 0, 0.0) } else { (m - 1, m, 0.75) }
+        } else if m + 1 >= n {
+            (n - 1, n - 1, 0.0)
+        } else {
+            (m, m + 1, 0.25)
+        }
+    };
+    // Horizontal pass.
+    let mut tmp = Plane::new(w2, h);
+    let xt: Vec<_> = (0..w2).map(|t| taps(t, w)).collect();
+    for y in 0..h {
+        let src = &img.data()[y * w..(y + 1) * w];
+        for (x, &(a, b, f)) in xt.iter().enumerate() {
+            tmp.data[y * w2 + x] = src[a] as f32 * (1.0 - f) + src[b] as f32 * f;
+        }
+    }
+    let mut out = Plane::new(w2, h2);
+    for y2 in 0..h2 {
+        let (a, b, f) = taps(y2, h);
+        for x in 0..w2 {
+            out.data[y2 * w2 + x] = tmp.data[a * w2 + x] * (1.0 - f) + tmp.data[b * w2 + x] * f;
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn upsample_weights_and_edges() {
+        let img = GrayImage::new(3, 1, vec![0, 16, 32]).unwrap();
+        let up = upsample2x(&img);
+        assert_eq!(up.width, 6);
+        assert_eq!(up.row(0), &[0.0, 4.0, 12.0, 20.0, 28.0, 32.0]);
+        assert_eq!(up.row(1), up.row(0));
+    }
+
+    #[test]
+    fn sig_diff_is_opencvs() {
+        let s = 1.6f32;
+        let sig_diff = (s * s - 1.0f32).max(0.01f32).sqrt();
+        assert_eq!(sig_diff.to_bits(), 0x3F9FDF39);
+    }
+}

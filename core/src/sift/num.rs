@@ -1,0 +1,181 @@
+//! The exact scalar kernels OpenCV's SIFT is built from (spec §12), and the one
+//! fused multiply-add every stage uses.
+
+/// A fused multiply-add with a single rounding: `a * b + c`.
+///
+/// OpenCV's AVX2 kernels and GCC's contraction fuse exactly where the spec says
+/// `fma`, so a separate multiply and add would be off by an ulp there.
+/// On x86-64 with FMA compiled in this is one instruction; elsewhere native
+/// targets call the C library's `fmaf` (hardware via ifunc on glibc).
+#[cfg(not(target_arch = "wasm32"))]
+#[inline(always)]
+pub fn fma(a: f32, b: f32, c: f32) -> f32 {
+    a.mul_add(b, c)
+}
+
+/// WebAssembly has no fused multiply-add, and `mul_add` there is a slow
+/// software routine. The product of two f32 is exact in f64 (48-bit
+/// significand), so only the final addition rounds: we add in f64 with
+/// round-to-odd (TwoSum gives the exact error) and then round once to f32.
+/// Round-to-odd in a format with >= 2 extra bits makes the double rounding
+/// equal to a single correct rounding.
+#[cfg(target_arch = "wasm32")]
+#[inline(always)]
+pub fn fma(a: f32, b: f32, c: f32) -> f32 {
+    fma_emulated(a, b, c)
+}
+
+/// The f64 round-to-odd emulation of [`fma`], exposed so native tests can
+/// check it against the hardware instruction.
+#[inline(always)]
+pub fn fma_emulated(a: f32, b: f32, c: f32) -> f32 {
+    let p = a as f64 * b as f64;
+    let c = c as f64;
+    let s = p + c;
+    // TwoSum: err is the exact rounding error of s = p + c.
+    let bb = s - p;
+    let err = (p - (s - bb)) + (c - bb);
+    let mut bits = s.to_bits();
+    if err != 0.0 && bits & 1 == 0 && s.is_finite() {
+        // s was rounded; move it one ulp towards the exact value and make it odd.
+        if (err > 0.0) == (s > 0.0) {
+            bits += 1;
+        } else {
+            bits -= 1;
+        }
+    }
+    f64::from_bits(bits) as f32
+}
+
+/// `cvRound` on floats: `lrintf` in the default rounding mode.
+#[inline(always)]
+pub fn rne(x: f32) -> i32 {
+    x.round_ties_even() as i32
+}
+
+/// `cvRound` on doubles.
+#[inline(always)]
+pub fn rne64(x: f64) -> i32 {
+    x.round_ties_even() as i32
+}
+
+/// `cvFloor`.
+#[inline(always)]
+pub fn floor(x: f32) -> i32 {
+    x.floor() as i32
+}
+
+pub const FLT_EPSILON: f32 = f32::EPSILON;
+
+// fastAtan2 coefficients: the f32 product of each coefficient and (f32)(180/pi).
+const ATAN_P1: f32 = f32::from_bits(0x4265226F);
+const ATAN_P3: f32 = f32::from_bits(0xC19556EE);
+const ATAN_P5: f32 = f32::from_bits(0x410E9FBF);
+const ATAN_P7: f32 = f32::from_bits(0xC0228AD9);
+const ATAN_EPS: f32 = f32::from_bits(0x25800000); // 2^-52 as f32
+
+/// OpenCV's `fastAtan2` in degrees, [0, 360) (spec §12; no IPP, fully exact).
+#[inline(always)]
+pub fn fast_atan2_deg(y: f32, x: f32) -> f32 {
+    let ax = x.abs();
+    let ay = y.abs();
+    let c = ax.min(ay) / (ax.max(ay) + ATAN_EPS);
+    let c2 = c * c;
+    let mut a = fma(fma(fma(c2, ATAN_P7, ATAN_P5), c2, ATAN_P3), c2, ATAN_P1) * c;
+    if !(ax >= ay) {
+        a = 90.0 - a;
+    }
+    if x < 0.0 {
+        a = 180.0 - a;
+    }
+    if y < 0.0 {
+        a = 360.0 - a;
+    }
+    a
+}
+
+/// `cv::hal::magnitude32f` with IPP disabled: `sqrtf(fma(x, x, y*y))`.
+#[inline(always)]
+pub fn magnitude(x: f32, y: f32) -> f32 {
+    fma(x, x, y * y).sqrt()
+}
+
+const EXP_TAB: [u32; 64] = [
+    0x3c1e707a, 0x3c202a27, 0x3c21e8a3, 0x3c23abfb, 0x3c25743e, 0x3c274179, 0x3c2913b9, 0x3c2aeb0d,
+    0x3c2cc783, 0x3c2ea92a, 0x3c30900f, 0x3c327c41, 0x3c346dcf, 0x3c3664c9, 0x3c38613c, 0x3c3a6339,
+    0x3c3c6acf, 0x3c3e780d, 0x3c408b03, 0x3c42a3c1, 0x3c44c258, 0x3c46e6d7, 0x3c491150, 0x3c4b41d2,
+    0x3c4d786e, 0x3c4fb536, 0x3c51f83b, 0x3c54418e, 0x3c569140, 0x3c58e764, 0x3c5b440b, 0x3c5da748,
+    0x3c60112d, 0x3c6281cc, 0x3c64f939, 0x3c677786, 0x3c69fcc6, 0x3c6c890c, 0x3c6f1c6e, 0x3c71b6fd,
+    0x3c7458ce, 0x3c7701f6, 0x3c79b289, 0x3c7c6a9b, 0x3c7f2a41, 0x3c80f8c9, 0x3c826050, 0x3c83cbc2,
+    0x3c853b29, 0x3c86ae90, 0x3c882602, 0x3c89a18b, 0x3c8b2136, 0x3c8ca50f, 0x3c8e2d21, 0x3c8fb977,
+    0x3c914a1f, 0x3c92df23, 0x3c947891, 0x3c961674, 0x3c97b8d8, 0x3c995fcb, 0x3c9b0b59, 0x3c9cbb8f,
+];
+const EXP_A1: f32 = f32::from_bits(0x40B7AA3D);
+const EXP_A2: f32 = f32::from_bits(0x41C6BB64);
+const EXP_A3: f32 = f32::from_bits(0x428F5AD6);
+const EXP_A4: f32 = f32::from_bits(0x42CED13A);
+
+/// `cv::hal::exp32f` with IPP disabled (spec §12). The default wheel uses
+/// IPP's closed-source exp instead, which no formula reproduces; this is the
+/// reason angles can differ from that wheel at the 1e-5 degree level.
+#[inline(always)]
+pub fn exp32f(x: f32) -> f32 {
+    let x = x.clamp(-2079.4417, 2079.4417) * f32::from_bits(0x42B8AA3B);
+    let xi = rne(x);
+    let xf = (x - xi as f32) * 0.015625;
+    let e = ((xi >> 6) + 127).clamp(0, 255) as u32;
+    let tab = f32::from_bits(EXP_TAB[(xi & 63) as usize]) * f32::from_bits(e << 23);
+    let mut z = xf + EXP_A1;
+    z = fma(z, xf, EXP_A2);
+    z = fma(z, xf, EXP_A3);
+    z = fma(z, xf, EXP_A4);
+    z * tab
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn emulated_fma_equals_hardware_fma() {
+        // Hard cases: products whose f64 sum lands on an f32 rounding midpoint.
+        let mut state = 0x2545F4914F6CDD1Du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let mut checked = 0;
+        for _ in 0..2_000_000 {
+            let r = next();
+            let a = f32::from_bits((r as u32 & 0x807F_FFFF) | 0x3F00_0000);
+            let b = f32::from_bits(((r >> 32) as u32 & 0x807F_FFFF) | 0x3F00_0000);
+            let c = -(a * b) + f32::from_bits((next() as u32 & 0x807F_FFFF) | 0x3300_0000);
+            assert_eq!(fma_emulated(a, b, c).to_bits(), a.mul_add(b, c).to_bits(), "{a} {b} {c}");
+            checked += 1;
+        }
+        assert_eq!(checked, 2_000_000);
+        // A midpoint case: 1 + 2^-24 + tiny must round up, double rounding would not.
+        let a = 1.0f32 + f32::EPSILON;
+        assert_eq!(fma_emulated(a, a, -1.0).to_bits(), a.mul_add(a, -1.0).to_bits());
+    }
+
+    #[test]
+    fn fast_atan2_quadrants() {
+        assert_eq!(fast_atan2_deg(0.0, 1.0), 0.0);
+        assert!((fast_atan2_deg(1.0, 1.0) - 45.0).abs() < 0.01);
+        assert!((fast_atan2_deg(1.0, -1.0) - 135.0).abs() < 0.01);
+        assert!((fast_atan2_deg(-1.0, -1.0) - 225.0).abs() < 0.01);
+        assert!((fast_atan2_deg(-1.0, 1.0) - 315.0).abs() < 0.01);
+    }
+
+    #[test]
+    fn exp32f_is_close_to_exp() {
+        for &x in &[0.0f32, -0.5, -1.0, -3.25, -10.0, -20.0] {
+            let r = exp32f(x);
+            assert!(((r - x.exp()) / x.exp()).abs() < 1e-6, "{x}: {r} vs {}", x.exp());
+        }
+        assert_eq!(exp32f(0.0), 1.0);
+    }
+}

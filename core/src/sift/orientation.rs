@@ -1,0 +1,107 @@
+//! Orientation assignment, `calcOrientationHist` (spec §8): a 36-bin
+//! gradient histogram around the refined pixel, smoothed, one keypoint per
+//! peak above 80% of the maximum.
+
+use super::extrema::Refined;
+use super::image::Plane;
+use super::num::{exp32f, fast_atan2_deg, fma, magnitude, rne, FLT_EPSILON};
+use super::{KeyPoint, SiftParams};
+
+const ORI_HIST_BINS: usize = 36;
+const ORI_SIG_FCTR: f32 = 1.5;
+const ORI_RADIUS: f32 = 4.5;
+const ORI_PEAK_RATIO: f32 = 0.8;
+
+/// Pushes one copy of the refined keypoint per qualifying histogram peak.
+pub fn push_oriented(gauss: &[Plane], refined: Refined, p: &SiftParams, out: &mut Vec<KeyPoint>) {
+    let Refined { kp, o, layer, r, c } = refined;
+    let scl = kp.size * 0.5 / (1u32 << o) as f32;
+    let img = &gauss[o * (p.n_octave_layers + 3) + layer];
+    let hist = orientation_hist(img, r, c, rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
+    let omax = hist.iter().copied().fold(hist[0], f32::max);
+    let mag_thr = omax * ORI_PEAK_RATIO;
+    let n = ORI_HIST_BINS;
+    for j in 0..n {
+        let l = if j > 0 { j - 1 } else { n - 1 };
+        let q = if j < n - 1 { j + 1 } else { 0 };
+        if hist[j] > hist[l] && hist[j] > hist[q] && hist[j] >= mag_thr {
+            let mut bin = j as f32 + 0.5 * (hist[l] - hist[q]) / ((hist[l] - 2.0 * hist[j]) + hist[q]);
+            if bin < 0.0 {
+                bin += n as f32;
+            } else if bin >= n as f32 {
+                bin -= n as f32;
+            }
+            // 360 − (360/n)·bin contracted by GCC into one FMA.
+            let mut angle = fma(-bin, 360.0 / n as f32, 360.0);
+            if (angle - 360.0).abs() < FLT_EPSILON {
+                angle = 0.0;
+            }
+            out.push(KeyPoint { angle, ..kp });
+        }
+    }
+}
+
+/// The smoothed 36-bin histogram. `lanes` is the SIMD width OpenCV's
+/// dispatched kernel used: the first `len − len % lanes` samples add a
+/// rounded product, the scalar tail is FMA-contracted.
+fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize) -> [f32; 36] {
+    let expf_scale = -1.0 / ((2.0 * sigma) * sigma);
+    let (rows, cols) = (img.height as i64, img.width as i64);
+    let cap = ((2 * radius + 1) * (2 * radius + 1)) as usize;
+    let mut dxs = Vec::with_capacity(cap);
+    let mut dys = Vec::with_capacity(cap);
+    let mut ws = Vec::with_capacity(cap);
+    for i in -radius..=radius {
+        let y = r as i64 + i as i64;
+        if y <= 0 || y >= rows - 1 {
+            continue;
+        }
+        let (up, row, down) = (img.row(y as usize - 1), img.row(y as usize), img.row(y as usize + 1));
+        for j in -radius..=radius {
+            let x = c as i64 + j as i64;
+            if x <= 0 || x >= cols - 1 {
+                continue;
+            }
+            let x = x as usize;
+            dxs.push(row[x + 1] - row[x - 1]);
+            dys.push(up[x] - down[x]);
+            ws.push((i * i + j * j) as f32 * expf_scale);
+        }
+    }
+    let len = dxs.len();
+    let simd_len = len - len % lanes;
+    let mut t = [0f32; 36 + 4];
+    // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
+    for k in 0..len {
+        let wt = exp32f(ws[k]);
+        let ori = fast_atan2_deg(dys[k], dxs[k]);
+        let mag = magnitude(dxs[k], dys[k]);
+        let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
+        if bin >= 36 {
+            bin -= 36;
+        }
+        if bin < 0 {
+            bin += 36;
+        }
+        let slot = &mut t[bin as usize + 2];
+        *slot = if k < simd_len { *slot + wt * mag } else { fma(wt, mag, *slot) };
+    }
+    t[0] = t[36];
+    t[1] = t[37];
+    t[38] = t[2];
+    t[39] = t[3];
+    let mut h = [0f32; 36];
+    for (i, hi) in h.iter_mut().enumerate() {
+        let a = t[i] + t[i + 4];
+        let b = t[i + 1] + t[i + 3];
+        let ci = t[i + 2];
+        // Bins 0..31 go through the SIMD loop, 32..35 through the scalar
+        // tail, which GCC fused in a different order.
+        *hi = if i < 32 {
+            fma(a, 0.0625, fma(b, 0.25, ci * 0.375))
+        } else {
+            fma(ci, 0.375, fma(a, 0.0625, b * 0.25))
+        };
+    }
+    h
+}

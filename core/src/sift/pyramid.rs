@@ -1,0 +1,99 @@
+//! Gaussian and difference-of-Gaussians pyramids (spec §4, §5).
+
+use super::blur::gaussian_blur;
+use super::image::Plane;
+use super::num::rne64;
+
+/// Number of octaves of the doubled base: `rne(log2(min(w, h)) − 2) + 1`
+/// with natural logs in f64, as OpenCV writes it.
+pub fn octave_count(base_w: usize, base_h: usize) -> usize {
+    let m = base_w.min(base_h);
+    if m < 2 {
+        return 0;
+    }
+    let n = rne64((m as f64).ln() / 2f64.ln() - 2.0) + 1;
+    n.max(0) as usize
+}
+
+/// Incremental σ of each level so level i has total σ·k^i (f64, no FMA).
+pub fn level_sigmas(sigma: f64, layers: usize) -> Vec<f64> {
+    let mut sig = vec![sigma; layers + 3];
+    let k = 2f64.powf(1.0 / layers as f64);
+    for (i, s) in sig.iter_mut().enumerate().skip(1) {
+        let sig_prev = k.powf((i - 1) as f64) * sigma;
+        let sig_total = sig_prev * k;
+        *s = (sig_total * sig_total - sig_prev * sig_prev).sqrt();
+    }
+    sig
+}
+
+/// `layers + 3` Gaussian levels per octave, indexed `o * (layers + 3) + i`.
+pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) -> Vec<Plane> {
+    let sig = level_sigmas(sigma, layers);
+    let per = layers + 3;
+    let mut pyr: Vec<Plane> = Vec::with_capacity(octaves * per);
+    for o in 0..octaves {
+        for i in 0..per {
+            let level = if o == 0 && i == 0 {
+                base.clone()
+            } else if i == 0 {
+                // INTER_NEAREST to (w/2, h/2) of the level with twice the base σ;
+                // for these sizes it always samples src[2y][2x].
+                downsample(&pyr[(o - 1) * per + layers])
+            } else {
+                gaussian_blur(&pyr[o * per + i - 1], sig[i])
+            };
+            pyr.push(level);
+        }
+    }
+    pyr
+}
+
+fn downsample(src: &Plane) -> Plane {
+    let (w, h) = (src.width / 2, src.height / 2);
+    let mut out = Plane::new(w, h);
+    for y in 0..h {
+        let s = src.row(2 * y);
+        for (x, d) in out.row_mut(y).iter_mut().enumerate() {
+            *d = s[2 * x];
+        }
+    }
+    out
+}
+
+/// `layers + 2` DoG levels per octave: plain f32 differences of neighbours.
+pub fn dog_pyramid(gauss: &[Plane], octaves: usize, layers: usize) -> Vec<Plane> {
+    let per = layers + 3;
+    let mut out = Vec::with_capacity(octaves * (layers + 2));
+    for o in 0..octaves {
+        for i in 0..layers + 2 {
+            let a = &gauss[o * per + i];
+            let b = &gauss[o * per + i + 1];
+            let data = b.data.iter().zip(&a.data).map(|(&b, &a)| b - a).collect();
+            out.push(Plane { width: a.width, height: a.height, data });
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sigmas_match_spec() {
+        let s = level_sigmas(1.6, 3);
+        assert_eq!(s[1], 1.2262734984654078);
+        assert_eq!(s[2], 1.5450077936447955);
+        assert_eq!(s[3], 1.9465878414647133);
+        assert_eq!(s[4], 2.4525469969308156);
+        assert_eq!(s[5], 3.090015587289591);
+    }
+
+    #[test]
+    fn octaves_for_common_sizes() {
+        assert_eq!(octave_count(1280, 960), 9); // 640x480 input
+        assert_eq!(octave_count(2482, 752), 9); // KITTI 1241x376
+        assert_eq!(octave_count(2, 2), 0);
+    }
+}
