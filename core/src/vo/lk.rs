@@ -1,0 +1,697 @@
+//! `cv2.calcOpticalFlowPyrLK(prev, next, pts, None, winSize=(21,21),
+//! criteria=(EPS|COUNT, 30, 0.01))` as OpenCV 4.8 computes it
+//! (opencv-vo-4.8.md §2): the integer pyramid (pyrDown), the unscaled Scharr
+//! derivatives, and the fixed-point Lucas-Kanade iteration with the f32
+//! accumulation orders of OpenCV's 128-bit SIMD loops. All of this is baseline
+//! code in OpenCV (no FMA), so every f32 operation below rounds separately.
+
+use crate::image::GrayImage;
+
+/// Window side (21×21); the lab never changes it.
+pub const WIN: usize = 21;
+/// Border around every padded level: OpenCV pads by the window size.
+const PAD: usize = WIN;
+/// `(winSize - 1) * 0.5f`.
+const HALF_WIN: f32 = 10.0;
+const W_BITS: i32 = 14;
+/// `FLT_SCALE = 1.f / (1 << 20)`.
+const FLT_SCALE: f32 = 1.0 / (1u32 << 20) as f32;
+
+/// The tracker's parameters as `calcOpticalFlowPyrLK` effectively uses them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LkParams {
+    /// Requested pyramid depth (may be lowered by the size rule).
+    pub max_level: usize,
+    /// Iteration cap (`criteria.maxCount`, clamped to [0, 100]).
+    pub max_count: usize,
+    /// `criteria.epsilon` before squaring (clamped to [0, 10]).
+    pub epsilon: f64,
+    /// `minEigThreshold`.
+    pub min_eig_threshold: f64,
+}
+
+impl Default for LkParams {
+    /// The lab's call: maxLevel 3, 30 iterations / 0.01, minEigThreshold 1e-4.
+    fn default() -> Self {
+        LkParams { max_level: 3, max_count: 30, epsilon: 0.01, min_eig_threshold: 1e-4 }
+    }
+}
+
+/// Output of [`calc_optical_flow_pyr_lk`], one entry per input point.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LkResult {
+    pub next_pts: Vec<[f32; 2]>,
+    pub status: Vec<bool>,
+    /// Mean absolute difference (8-bit units) for status-1 points; for a
+    /// status-0 point OpenCV leaves uninitialized memory, here it is 0.
+    pub err: Vec<f32>,
+}
+
+/// `borderInterpolate(p, len, BORDER_REFLECT_101)`, repeated for borders wider
+/// than the image.
+#[inline]
+fn reflect101(mut p: isize, len: usize) -> usize {
+    let n = len as isize;
+    if n == 1 {
+        return 0;
+    }
+    while p < 0 || p >= n {
+        p = if p < 0 { -p } else { 2 * n - 2 - p };
+    }
+    p as usize
+}
+
+/// `cv::pyrDown` on 8-bit data, exact integer arithmetic: the 5×5 binomial
+/// kernel (sum 256) over reflect-101 of the source level, `+128 >> 8`.
+pub fn pyr_down(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, usize) {
+    let (dw, dh) = ((w + 1) / 2, (h + 1) / 2);
+    // Horizontal pass for every source row, kept as exact integers.
+    let cols: Vec<[usize; 5]> = (0..dw)
+        .map(|x| {
+            let c = 2 * x as isize;
+            [
+                reflect101(c - 2, w),
+                reflect101(c - 1, w),
+                reflect101(c, w),
+                reflect101(c + 1, w),
+                reflect101(c + 2, w),
+            ]
+        })
+        .collect();
+    let mut hrow = vec![0u32; dw * h];
+    for y in 0..h {
+        let row = &src[y * w..(y + 1) * w];
+        let out = &mut hrow[y * dw..(y + 1) * dw];
+        for (o, c) in out.iter_mut().zip(&cols) {
+            *o = row[c[0]] as u32
+                + 4 * row[c[1]] as u32
+                + 6 * row[c[2]] as u32
+                + 4 * row[c[3]] as u32
+                + row[c[4]] as u32;
+        }
+    }
+    let mut dst = vec![0u8; dw * dh];
+    for y in 0..dh {
+        let r = 2 * y as isize;
+        let rows = [
+            reflect101(r - 2, h),
+            reflect101(r - 1, h),
+            reflect101(r, h),
+            reflect101(r + 1, h),
+            reflect101(r + 2, h),
+        ];
+        let [r0, r1, r2, r3, r4] = rows.map(|ry| &hrow[ry * dw..(ry + 1) * dw]);
+        for x in 0..dw {
+            let s = r0[x] + 4 * r1[x] + 6 * r2[x] + 4 * r3[x] + r4[x];
+            dst[y * dw + x] = ((s + 128) >> 8) as u8;
+        }
+    }
+    (dst, dw, dh)
+}
+
+/// One pyramid level stored with a PAD-pixel reflect-101 border, as
+/// `buildOpticalFlowPyramid` keeps it.
+#[derive(Clone, Debug)]
+pub struct Level {
+    pub w: usize,
+    pub h: usize,
+    /// Unpadded pixels (row-major w×h).
+    pub pixels: Vec<u8>,
+    stride: usize,
+    padded: Vec<u8>,
+}
+
+impl Level {
+    fn new(pixels: Vec<u8>, w: usize, h: usize) -> Self {
+        let stride = w + 2 * PAD;
+        let ph = h + 2 * PAD;
+        let mut padded = vec![0u8; stride * ph];
+        let xs: Vec<usize> =
+            (0..stride).map(|x| reflect101(x as isize - PAD as isize, w)).collect();
+        for py in 0..ph {
+            let sy = reflect101(py as isize - PAD as isize, h);
+            let src = &pixels[sy * w..(sy + 1) * w];
+            let dst = &mut padded[py * stride..(py + 1) * stride];
+            for (d, &sx) in dst.iter_mut().zip(&xs) {
+                *d = src[sx];
+            }
+        }
+        Level { w, h, pixels, stride, padded }
+    }
+
+    /// Offset of pixel (x, y) (level coordinates, may be negative down to
+    /// −PAD) in the padded buffer.
+    #[inline]
+    fn offset(&self, x: i32, y: i32) -> usize {
+        ((y + PAD as i32) as usize) * self.stride + (x + PAD as i32) as usize
+    }
+}
+
+/// `buildOpticalFlowPyramid(img, winSize=21, maxLevel, withDerivatives=false)`:
+/// stops early when the next level would be ≤ 21 pixels in either direction.
+pub fn build_pyramid(img: &GrayImage, max_level: usize) -> Vec<Level> {
+    let (mut w, mut h) = (img.width(), img.height());
+    let mut levels = vec![Level::new(img.data().to_vec(), w, h)];
+    for _ in 0..max_level {
+        let (nw, nh) = ((w + 1) / 2, (h + 1) / 2);
+        if nw <= WIN || nh <= WIN {
+            break;
+        }
+        let prev = levels.last().map(|l| &l.pixels[..]).unwrap_or(&[]);
+        let (d, dw, dh) = pyr_down(prev, w, h);
+        levels.push(Level::new(d, dw, dh));
+        w = dw;
+        h = dh;
+    }
+    levels
+}
+
+/// Scharr derivatives of one level (`calcSharrDeriv`): no scaling, reflect-101
+/// inside the level, then a PAD-pixel border of zeros (BORDER_CONSTANT).
+#[derive(Clone, Debug)]
+pub struct Deriv {
+    stride: usize,
+    ix: Vec<i16>,
+    iy: Vec<i16>,
+}
+
+impl Deriv {
+    pub fn new(level: &Level) -> Self {
+        let (w, h) = (level.w, level.h);
+        let img = &level.pixels;
+        let stride = w + 2 * PAD;
+        let mut ix = vec![0i16; stride * (h + 2 * PAD)];
+        let mut iy = vec![0i16; stride * (h + 2 * PAD)];
+        let mut s = vec![0i32; w];
+        let mut d = vec![0i32; w];
+        for y in 0..h {
+            let up = &img[reflect101(y as isize - 1, h) * w..][..w];
+            let mid = &img[y * w..][..w];
+            let dn = &img[reflect101(y as isize + 1, h) * w..][..w];
+            for x in 0..w {
+                s[x] = 3 * up[x] as i32 + 10 * mid[x] as i32 + 3 * dn[x] as i32;
+                d[x] = dn[x] as i32 - up[x] as i32;
+            }
+            let row = (y + PAD) * stride + PAD;
+            for x in 0..w {
+                let l = reflect101(x as isize - 1, w);
+                let r = reflect101(x as isize + 1, w);
+                ix[row + x] = (s[r] - s[l]) as i16;
+                iy[row + x] = (3 * d[l] + 10 * d[x] + 3 * d[r]) as i16;
+            }
+        }
+        Deriv { stride, ix, iy }
+    }
+
+    #[inline]
+    fn offset(&self, x: i32, y: i32) -> usize {
+        ((y + PAD as i32) as usize) * self.stride + (x + PAD as i32) as usize
+    }
+}
+
+/// The four 14-bit bilinear weights OpenCV derives from the fractional part
+/// (each product an f32 operation in source order, rounded half-even).
+#[inline]
+fn weights(a: f32, b: f32) -> [i32; 4] {
+    let one = (1i32 << W_BITS) as f32;
+    let w00 = ((1.0 - a) * (1.0 - b) * one).round_ties_even() as i32;
+    let w01 = (a * (1.0 - b) * one).round_ties_even() as i32;
+    let w10 = ((1.0 - a) * b * one).round_ties_even() as i32;
+    [w00, w01, w10, (1 << W_BITS) - w00 - w01 - w10]
+}
+
+/// Interpolates a 21×21 window of a padded u8 level at top-left `(ix, iy)`
+/// into values ×32 (`CV_DESCALE(..., W_BITS - 5)`).
+#[inline]
+fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut [[i32; WIN]; WIN]) {
+    let stride = level.stride;
+    let base = level.offset(ix, iy);
+    for (y, row) in out.iter_mut().enumerate() {
+        let r0 = &level.padded[base + y * stride..][..WIN + 1];
+        let r1 = &level.padded[base + (y + 1) * stride..][..WIN + 1];
+        for x in 0..WIN {
+            let v = r0[x] as i32 * w[0]
+                + r0[x + 1] as i32 * w[1]
+                + r1[x] as i32 * w[2]
+                + r1[x + 1] as i32 * w[3];
+            row[x] = (v + (1 << (W_BITS - 5 - 1))) >> (W_BITS - 5);
+        }
+    }
+}
+
+#[inline]
+fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut [[i32; WIN]; WIN]) {
+    for (y, row) in out.iter_mut().enumerate() {
+        let r0 = &plane[base + y * stride..][..WIN + 1];
+        let r1 = &plane[base + (y + 1) * stride..][..WIN + 1];
+        for x in 0..WIN {
+            let v = r0[x] as i32 * w[0]
+                + r0[x + 1] as i32 * w[1]
+                + r1[x] as i32 * w[2]
+                + r1[x + 1] as i32 * w[3];
+            row[x] = (v + (1 << (W_BITS - 1))) >> W_BITS;
+        }
+    }
+}
+
+/// Sum of `f(x, y)` over the window in the order OpenCV's SSE loop plus
+/// scalar tail produce (§2.4 "Structure tensor"): columns 0..15 into four
+/// lanes (column c → lane c mod 4), columns 16..20 into a scalar, then
+/// `S + ((L0 + L2) + (L1 + L3))`.
+#[inline]
+fn tensor_sum(a: &[[i32; WIN]; WIN], b: &[[i32; WIN]; WIN]) -> f32 {
+    let mut lanes = [0f32; 4];
+    let mut s = 0f32;
+    for (ra, rb) in a.iter().zip(b) {
+        for c in 0..16 {
+            lanes[c & 3] += (ra[c] * rb[c]) as f32;
+        }
+        for c in 16..WIN {
+            s += (ra[c] * rb[c]) as f32;
+        }
+    }
+    s + ((lanes[0] + lanes[2]) + (lanes[1] + lanes[3]))
+}
+
+/// The mismatch vector (b1, b2) in OpenCV's SIMD order (§2.4 step 3): pairs
+/// of products `d(c)·Z(c) + d(c+4)·Z(c+4)` added as exact integers, then
+/// rounded into eight f32 lanes; columns 16..20 into two scalars.
+#[inline]
+fn mismatch(
+    d: &[[i32; WIN]; WIN],
+    gx: &[[i32; WIN]; WIN],
+    gy: &[[i32; WIN]; WIN],
+) -> (f32, f32) {
+    let mut p = [0f32; 4];
+    let mut q = [0f32; 4];
+    let (mut s1, mut s2) = (0f32, 0f32);
+    for y in 0..WIN {
+        let (dr, xr, yr) = (&d[y], &gx[y], &gy[y]);
+        for base in [0usize, 8] {
+            let u = |c: usize, z: &[i32; WIN]| (dr[c] * z[c] + dr[c + 4] * z[c + 4]) as f32;
+            p[0] += u(base, xr);
+            p[1] += u(base, yr);
+            p[2] += u(base + 1, xr);
+            p[3] += u(base + 1, yr);
+            q[0] += u(base + 2, xr);
+            q[1] += u(base + 2, yr);
+            q[2] += u(base + 3, xr);
+            q[3] += u(base + 3, yr);
+        }
+        for c in 16..WIN {
+            s1 += (dr[c] * xr[c]) as f32;
+            s2 += (dr[c] * yr[c]) as f32;
+        }
+    }
+    let t: [f32; 4] = [p[0] + q[0], p[1] + q[1], p[2] + q[2], p[3] + q[3]];
+    ((s1 + (t[0] + t[2])) * FLT_SCALE, (s2 + (t[1] + t[3])) * FLT_SCALE)
+}
+
+#[inline]
+fn out_of_bounds(ix: i32, iy: i32, w: usize, h: usize) -> bool {
+    ix < -(WIN as i32) || ix >= w as i32 || iy < -(WIN as i32) || iy >= h as i32
+}
+
+/// One level for one point (LKTrackerInvoker::operator()). `next` holds the
+/// stored estimate, updated in place; `status`/`err` are only touched at
+/// level 0.
+#[allow(clippy::too_many_arguments)]
+fn track_point(
+    prev: &Level,
+    deriv: &Deriv,
+    next_lvl: &Level,
+    prev_pt: [f32; 2],
+    next: &mut [f32; 2],
+    status: &mut bool,
+    err: &mut f32,
+    level: usize,
+    max_level: usize,
+    crit: (usize, f64),
+    min_eig_threshold: f32,
+) {
+    let scale = 1.0 / (1u32 << level) as f32;
+    let p = [prev_pt[0] * scale, prev_pt[1] * scale];
+    let guess = if level == max_level { p } else { [next[0] * 2.0, next[1] * 2.0] };
+    *next = guess;
+
+    let q = [p[0] - HALF_WIN, p[1] - HALF_WIN];
+    let (ix, iy) = (q[0].floor() as i32, q[1].floor() as i32);
+    if out_of_bounds(ix, iy, prev.w, prev.h) {
+        if level == 0 {
+            *status = false;
+            *err = 0.0;
+        }
+        return;
+    }
+    let wts = weights(q[0] - ix as f32, q[1] - iy as f32);
+    let mut tmpl = [[0i32; WIN]; WIN];
+    let mut gx = [[0i32; WIN]; WIN];
+    let mut gy = [[0i32; WIN]; WIN];
+    warp_window(prev, ix, iy, &wts, &mut tmpl);
+    let dbase = deriv.offset(ix, iy);
+    warp_deriv(&deriv.ix, deriv.stride, dbase, &wts, &mut gx);
+    warp_deriv(&deriv.iy, deriv.stride, dbase, &wts, &mut gy);
+
+    let a11 = tensor_sum(&gx, &gx) * FLT_SCALE;
+    let a12 = tensor_sum(&gx, &gy) * FLT_SCALE;
+    let a22 = tensor_sum(&gy, &gy) * FLT_SCALE;
+    let det = a11 * a22 - a12 * a12;
+    let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt())
+        / (2 * WIN * WIN) as f32;
+    if min_eig < min_eig_threshold || det < f32::EPSILON {
+        if level == 0 {
+            *status = false;
+        }
+        return;
+    }
+    let dinv = 1.0 / det;
+
+    let mut n = [guess[0] - HALF_WIN, guess[1] - HALF_WIN];
+    let mut prev_delta = [0f32; 2];
+    let mut warped = [[0i32; WIN]; WIN];
+    let (max_count, eps2) = crit;
+    for j in 0..max_count {
+        let (jx, jy) = (n[0].floor() as i32, n[1].floor() as i32);
+        if out_of_bounds(jx, jy, next_lvl.w, next_lvl.h) {
+            if level == 0 {
+                *status = false;
+            }
+            break;
+        }
+        let w = weights(n[0] - jx as f32, n[1] - jy as f32);
+        warp_window(next_lvl, jx, jy, &w, &mut warped);
+        for (wr, tr) in warped.iter_mut().zip(&tmpl) {
+            for (v, t) in wr.iter_mut().zip(tr) {
+                *v -= t;
+            }
+        }
+        let (b1, b2) = mismatch(&warped, &gx, &gy);
+        let delta = [(a12 * b2 - a22 * b1) * dinv, (a12 * b1 - a11 * b2) * dinv];
+        n = [n[0] + delta[0], n[1] + delta[1]];
+        *next = [n[0] + HALF_WIN, n[1] + HALF_WIN];
+        if (delta[0] as f64) * (delta[0] as f64) + (delta[1] as f64) * (delta[1] as f64) <= eps2 {
+            break;
+        }
+        if j > 0
+            && ((delta[0] + prev_delta[0]).abs() as f64) < 0.01
+            && ((delta[1] + prev_delta[1]).abs() as f64) < 0.01
+        {
+            // The step reversed itself: retreat half of it and stop.
+            *next = [next[0] - delta[0] * 0.5, next[1] - delta[1] * 0.5];
+            break;
+        }
+        prev_delta = delta;
+    }
+
+    if *status && level == 0 {
+        let m = [next[0] - HALF_WIN, next[1] - HALF_WIN];
+        let (jx, jy) = (m[0].floor() as i32, m[1].floor() as i32);
+        if out_of_bounds(jx, jy, next_lvl.w, next_lvl.h) {
+            *status = false;
+            return;
+        }
+        let w = weights(m[0] - jx as f32, m[1] - jy as f32);
+        warp_window(next_lvl, jx, jy, &w, &mut warped);
+        let mut errval = 0f32;
+        for (wr, tr) in warped.iter().zip(&tmpl) {
+            for (v, t) in wr.iter().zip(tr) {
+                errval += (v - t).abs() as f32;
+            }
+        }
+        *err = errval / (32 * WIN * WIN) as f32;
+    }
+}
+
+/// Pyramids and derivatives of a frame pair, built once per call.
+struct Prepared {
+    prev: Vec<Level>,
+    next: Vec<Level>,
+    derivs: Vec<Deriv>,
+}
+
+/// `cv2.calcOpticalFlowPyrLK(prev, next, pts, None, winSize=(21,21), ...)`.
+/// Both images must have the same size.
+pub fn calc_optical_flow_pyr_lk(
+    prev: &GrayImage,
+    next: &GrayImage,
+    pts: &[[f32; 2]],
+    params: &LkParams,
+) -> LkResult {
+    let prev_pyr = build_pyramid(prev, params.max_level);
+    let max_level = prev_pyr.len() - 1;
+    let next_pyr = build_pyramid(next, max_level);
+    let derivs = prev_pyr.iter().map(Deriv::new).collect();
+    let prep = Prepared { prev: prev_pyr, next: next_pyr, derivs };
+    track_prepared(&prep, pts, params)
+}
+
+fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams) -> LkResult {
+    let max_level = prep.prev.len().min(prep.next.len()) - 1;
+    let max_count = params.max_count.min(100);
+    let eps = params.epsilon.clamp(0.0, 10.0);
+    let crit = (max_count, eps * eps);
+    let min_eig = params.min_eig_threshold as f32;
+    let n = pts.len();
+    let mut next_pts = vec![[0f32; 2]; n];
+    let mut status = vec![true; n];
+    let mut err = vec![0f32; n];
+
+    // Points are independent (OpenCV runs them in parallel too, each result
+    // written by one task), so splitting them over threads changes nothing.
+    let run = |range: std::ops::Range<usize>, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]| {
+        for level in (0..=max_level).rev() {
+            let (pl, dl, nl) = (&prep.prev[level], &prep.derivs[level], &prep.next[level]);
+            for (k, i) in range.clone().enumerate() {
+                track_point(
+                    pl, dl, nl, pts[i], &mut np[k], &mut st[k], &mut er[k], level, max_level, crit,
+                    min_eig,
+                );
+            }
+        }
+    };
+
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let threads = std::thread::available_parallelism().map(|t| t.get()).unwrap_or(1).min(8);
+        if threads > 1 && n >= 64 {
+            let chunk = n.div_ceil(threads);
+            std::thread::scope(|s| {
+                let mut start = 0;
+                for ((np, st), er) in next_pts
+                    .chunks_mut(chunk)
+                    .zip(status.chunks_mut(chunk))
+                    .zip(err.chunks_mut(chunk))
+                {
+                    let range = start..start + np.len();
+                    start += np.len();
+                    let run = &run;
+                    s.spawn(move || run(range, np, st, er));
+                }
+            });
+            return LkResult { next_pts, status, err };
+        }
+    }
+    run(0..n, &mut next_pts, &mut status, &mut err);
+    LkResult { next_pts, status, err }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A smooth textured image: sums of sines, so sub-pixel shifts are
+    /// well defined, sampled at (x + dx, y + dy).
+    fn textured(w: usize, h: usize, dx: f64, dy: f64) -> GrayImage {
+        let mut data = vec![0u8; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let (u, v) = (x as f64 + dx, y as f64 + dy);
+                let val = 128.0
+                    + 35.0 * (u * 0.27 + v * 0.13).sin()
+                    + 35.0 * (v * 0.21 - u * 0.17).sin()
+                    + 30.0 * (u * 0.07 + v * 0.05).sin()
+                    + 25.0 * (u * 0.04 - v * 0.08).cos();
+                data[y * w + x] = val.round().clamp(0.0, 255.0) as u8;
+            }
+        }
+        GrayImage::new(w, h, data).unwrap()
+    }
+
+    #[test]
+    fn pyr_down_matches_cv2() {
+        // cv2.pyrDown(np.arange(35, dtype=np.uint8).reshape(5, 7) * 7)
+        let src: Vec<u8> = (0..35u32).map(|v| (v * 7) as u8).collect();
+        let (d, w, h) = pyr_down(&src, 7, 5);
+        assert_eq!((w, h), (4, 3));
+        assert_eq!(d, vec![42, 51, 65, 74, 103, 112, 126, 135, 165, 173, 187, 196]);
+    }
+
+    #[test]
+    fn pyramid_sizes_follow_the_window_rule() {
+        let img = GrayImage::new(1241, 376, vec![0; 1241 * 376]).unwrap();
+        let pyr = build_pyramid(&img, 3);
+        let sizes: Vec<_> = pyr.iter().map(|l| (l.w, l.h)).collect();
+        assert_eq!(sizes, vec![(1241, 376), (621, 188), (311, 94), (156, 47)]);
+        // 100x60 → 50x30 → next would be 25x15 (15 ≤ 21): maxLevel 1.
+        let small = GrayImage::new(100, 60, vec![0; 6000]).unwrap();
+        assert_eq!(build_pyramid(&small, 3).len(), 2);
+    }
+
+    #[test]
+    fn scharr_is_unscaled_with_reflect101() {
+        // A horizontal ramp I = 3x: Ix = (3+10+3)·(3(x+1) − 3(x−1)) = 96 inside,
+        // 0 on the reflected columns; Iy = 0 everywhere.
+        let (w, h) = (6usize, 4usize);
+        let data: Vec<u8> = (0..w * h).map(|i| (3 * (i % w)) as u8).collect();
+        let lvl = Level::new(data, w, h);
+        let d = Deriv::new(&lvl);
+        let at = |p: &Vec<i16>, x: i32, y: i32| p[d.offset(x, y)];
+        assert_eq!(at(&d.ix, 2, 1), 96);
+        assert_eq!(at(&d.ix, 0, 0), 0);
+        assert_eq!(at(&d.ix, 5, 3), 0);
+        assert_eq!(at(&d.iy, 3, 2), 0);
+        // The zero border.
+        assert_eq!(at(&d.ix, -1, 1), 0);
+    }
+
+    #[test]
+    fn recovers_a_known_subpixel_shift() {
+        let (w, h) = (320, 240);
+        let (sx, sy) = (2.37, -1.61);
+        let prev = textured(w, h, 0.0, 0.0);
+        // next(x, y) = prev(x + sx, y + sy) → features move by (−sx, −sy).
+        let next = textured(w, h, sx, sy);
+        let mut pts = Vec::new();
+        for gy in 0..6 {
+            for gx in 0..8 {
+                pts.push([40.0 + 32.0 * gx as f32 + 0.25, 40.0 + 30.0 * gy as f32 + 0.5]);
+            }
+        }
+        let out = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
+        let (mut worst, mut sum) = (0f64, 0f64);
+        for (i, p) in pts.iter().enumerate() {
+            assert!(out.status[i], "point {i} lost");
+            let ex = (out.next_pts[i][0] - p[0]) as f64 + sx;
+            let ey = (out.next_pts[i][1] - p[1]) as f64 + sy;
+            worst = worst.max(ex.abs()).max(ey.abs());
+            sum += ex.abs() + ey.abs();
+            assert!(out.err[i] < 2.0, "err {}", out.err[i]);
+        }
+        // Measured: worst 0.0088 px, mean 0.0030 px (8-bit quantization).
+        assert!(worst < 0.01, "worst shift error {worst}");
+        let mean = sum / (2 * pts.len()) as f64;
+        assert!(mean < 0.005, "mean error {mean}");
+    }
+
+    #[test]
+    fn status_flags_points_outside_the_image() {
+        let prev = textured(200, 120, 0.0, 0.0);
+        let next = textured(200, 120, 1.0, 0.0);
+        let pts = [[100.0, 60.0], [-40.0, 60.0], [100.0, 500.0], [250.0, 10.0]];
+        let out = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
+        assert_eq!(out.status, vec![true, false, false, false]);
+        // A previous point out of bounds at level 0 gets err 0 explicitly.
+        assert_eq!(out.err[1], 0.0);
+        // A flat image has no gradient: the eigenvalue test fails.
+        let flat = GrayImage::new(200, 120, vec![90; 24000]).unwrap();
+        let out = calc_optical_flow_pyr_lk(&flat, &flat, &[[100.0, 60.0]], &LkParams::default());
+        assert_eq!(out.status, vec![false]);
+    }
+
+    /// calcOpticalFlowPyrLK(lk_prev.png, lk_next.png, ...) from the 4.8.0.76
+    /// wheel (testdata/gen_goldens.py): input point, output x/y f32 bits,
+    /// status, err f32 bits (status-1 points only; status-0 err is garbage).
+    const LK_GOLDEN: &[([f32; 2], [u32; 2], u8, u32)] = &[
+        ([12.25, 9.5], [0x411d2c23, 0x4131d214], 1, 0x3efec435),
+        ([49.25, 9.5], [0x423b60e8, 0x4131aca0], 1, 0x3ec27795),
+        ([86.25, 9.5], [0x42a7b2c5, 0x4131b715], 1, 0x3edc4ca0),
+        ([123.25, 9.5], [0x42f1ab60, 0x4131a8ed], 1, 0x3ed6acfd),
+        ([160.25, 9.5], [0x431dd9ea, 0x4131ca61], 1, 0x3ed542c2),
+        ([197.25, 9.5], [0x4342d83c, 0x4131bf57], 1, 0x3ec526e5),
+        ([234.25, 9.5], [0x4367d714, 0x4131912c], 1, 0x3ed5ce14),
+        ([271.25, 9.5], [0x43866ce8, 0x41319164], 1, 0x3ec8da44),
+        ([308.25, 9.5], [0x4398ec06, 0x4131a996], 1, 0x3eb8d0fb),
+        ([12.25, 45.5], [0x411d7b8c, 0x423c6160], 1, 0x3edb078c),
+        ([49.25, 45.5], [0x423b5f54, 0x423c6394], 1, 0x3ec0cc56),
+        ([86.25, 45.5], [0x42a7b1f8, 0x423c679b], 1, 0x3eccc55f),
+        ([123.25, 45.5], [0x42f1a6bb, 0x423c72c6], 1, 0x3eb00000),
+        ([160.25, 45.5], [0x431dd811, 0x423c63f9], 1, 0x3ec1e2fa),
+        ([197.25, 45.5], [0x4342d96c, 0x423c658c], 1, 0x3edb2369),
+        ([234.25, 45.5], [0x4367d972, 0x423c6b9a], 1, 0x3eb92492),
+        ([271.25, 45.5], [0x43866c11, 0x423c66e0], 1, 0x3ed542c2),
+        ([308.25, 45.5], [0x4398ec71, 0x423c6748], 1, 0x3ee9d50b),
+        ([12.25, 81.5], [0x411d646f, 0x42a638ed], 1, 0x3f03804a),
+        ([49.25, 81.5], [0x423b622e, 0x42a62eeb], 1, 0x3ed69a6a),
+        ([86.25, 81.5], [0x42a7b2d8, 0x42a634fe], 1, 0x3ebe6754),
+        ([123.25, 81.5], [0x42f1b480, 0x42a632d8], 1, 0x3ee5fc84),
+        ([160.25, 81.5], [0x431dd7db, 0x42a6340c], 1, 0x3ef6501c),
+        ([197.25, 81.5], [0x4342d94d, 0x42a631aa], 1, 0x3ec7b10d),
+        ([234.25, 81.5], [0x4367d735, 0x42a62e7d], 1, 0x3ec6343f),
+        ([271.25, 81.5], [0x43866b51, 0x42a62b94], 1, 0x3eb3280e),
+        ([308.25, 81.5], [0x4398eae1, 0x42a6336d], 1, 0x3ebcc55f),
+        ([12.25, 117.5], [0x411d76da, 0x42ee3321], 1, 0x3eeb35fd),
+        ([49.25, 117.5], [0x423b6de0, 0x42ee3138], 1, 0x3ed8f622),
+        ([86.25, 117.5], [0x42a7b570, 0x42ee34c3], 1, 0x3eb583c6),
+        ([123.25, 117.5], [0x42f1b72b, 0x42ee3999], 1, 0x3ebaebaf),
+        ([160.25, 117.5], [0x431dd7c1, 0x42ee3273], 1, 0x3eb0f17d),
+        ([197.25, 117.5], [0x4342d6ba, 0x42ee30af], 1, 0x3ebacfd2),
+        ([234.25, 117.5], [0x4367d7a8, 0x42ee301c], 1, 0x3ed5c4ca),
+        ([271.25, 117.5], [0x43866c71, 0x42ee358f], 1, 0x3ecac688),
+        ([308.25, 117.5], [0x4398ec3e, 0x42ee32a1], 1, 0x3eba1f59),
+        ([12.25, 153.5], [0x411d64a6, 0x431b1a4d], 1, 0x3ec6ee01),
+        ([49.25, 153.5], [0x423b6a1d, 0x431b1869], 1, 0x3eda8ecd),
+        ([86.25, 153.5], [0x42a7ab4f, 0x431b1c7d], 1, 0x3ed39783),
+        ([123.25, 153.5], [0x42f1afb4, 0x431b199b], 1, 0x3ee0949c),
+        ([160.25, 153.5], [0x431dd791, 0x431b18dc], 1, 0x3ea3280e),
+        ([197.25, 153.5], [0x4342d76e, 0x431b1a2c], 1, 0x3ec30c31),
+        ([234.25, 153.5], [0x4367d874, 0x431b1a7d], 1, 0x3ec1a1f6),
+        ([271.25, 153.5], [0x43866cd5, 0x431b1a02], 1, 0x3ed98174),
+        ([308.25, 153.5], [0x4398ebaa, 0x431b1716], 1, 0x3ebafe42),
+        ([12.25, 189.5], [0x411d7669, 0x433f1937], 1, 0x3f00abd4),
+        ([49.25, 189.5], [0x423b675a, 0x433f1a9b], 1, 0x3e9c7b11),
+        ([86.25, 189.5], [0x42a7b02e, 0x433f180a], 1, 0x3ec66bf9),
+        ([123.25, 189.5], [0x42f1b856, 0x433f18e5], 1, 0x3eb81738),
+        ([160.25, 189.5], [0x431dd2b7, 0x433f17b5], 1, 0x3ee6c8da),
+        ([197.25, 189.5], [0x4342d987, 0x433f193c], 1, 0x3ea62af5),
+        ([234.25, 189.5], [0x4367d830, 0x433f1acf], 1, 0x3ed157a8),
+        ([271.25, 189.5], [0x43866b03, 0x433f1708], 1, 0x3ecdad92),
+        ([308.25, 189.5], [0x4398eb65, 0x433f1b63], 1, 0x3ece422d),
+        ([12.25, 225.5], [0x411d67ec, 0x43631b34], 1, 0x3eb8e38e),
+        ([49.25, 225.5], [0x423b5fcf, 0x4363194b], 1, 0x3ed77009),
+        ([86.25, 225.5], [0x42a7b89b, 0x436318a9], 1, 0x3ef3eb1a),
+        ([123.25, 225.5], [0x42f1b138, 0x43631968], 1, 0x3eadc025),
+        ([160.25, 225.5], [0x431dd717, 0x43631cf2], 1, 0x3ebda448),
+        ([197.25, 225.5], [0x4342d740, 0x4363197f], 1, 0x3ee05ce1),
+        ([234.25, 225.5], [0x4367d42a, 0x436317e3], 1, 0x3ed91b49),
+        ([271.25, 225.5], [0x43866c0e, 0x43631a5b], 1, 0x3ee6acfd),
+        ([308.25, 225.5], [0x4398eb05, 0x43631ace], 1, 0x3eb384ef),
+        ([-15.0, 100.0], [0xc1c169e6, 0x42cd125f], 0, 0x00000000),
+        ([330.0, 20.0], [0x43a3cb02, 0x41ac688a], 0, 0x00000000),
+        ([160.0, -30.0], [0x431d8c81, 0xc1e464d8], 0, 0x00000000),
+        ([3.75, 236.5], [0x3fb44350, 0x436e28e9], 1, 0x41124199),
+        ([318.0, 2.0], [0x439dcd05, 0x40660546], 1, 0x411f6b64),
+    ];
+
+    #[test]
+    fn bit_exact_against_opencv_on_a_synthetic_pair() {
+        let prev = GrayImage::decode(include_bytes!("testdata/lk_prev.png")).unwrap();
+        let next = GrayImage::decode(include_bytes!("testdata/lk_next.png")).unwrap();
+        let pts: Vec<[f32; 2]> = LK_GOLDEN.iter().map(|g| g.0).collect();
+        let out = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
+        let mut exact = 0;
+        for (i, g) in LK_GOLDEN.iter().enumerate() {
+            let got = [out.next_pts[i][0].to_bits(), out.next_pts[i][1].to_bits()];
+            assert_eq!(out.status[i] as u8, g.2, "status of point {i}");
+            assert_eq!(
+                got, g.1,
+                "point {i} {:?}: got {:?}, OpenCV {:?}",
+                g.0, out.next_pts[i], [f32::from_bits(g.1[0]), f32::from_bits(g.1[1])]
+            );
+            if g.2 == 1 {
+                assert_eq!(out.err[i].to_bits(), g.3, "err of point {i}");
+            }
+            exact += 1;
+        }
+        assert_eq!(exact, 68);
+    }
+}
