@@ -8,6 +8,7 @@ Writes, for frames 000000..000005 of the dataset (default: the committed tests/f
   golden/ipp/NNNNNN.sift     SIFT (nfeatures=1500) with the default wheel (IPP on)
   golden/noipp/NNNNNN.sift   the same with OPENCV_IPP=disabled set before cv2 is imported and
                              cv2.setNumThreads(1) (run in a subprocess: IPP is chosen at import)
+  golden/meta.json           wheel, CPU, and the SIMD width (lanes) OpenCV's SIFT kernels ran with
   golden/get_info.jsonl      seeded random get_info draws (+ edge cases) over frame pairs 1..5,
                              stdout computed by lab_reference.py with the default wheel
 
@@ -160,6 +161,41 @@ def gen_get_info(dataset, label, out_path, n_draws, seed):
     print("get_info.jsonl: %d cases, %d with matches" % (len(cases), n_nonempty), file=sys.stderr)
 
 
+def opencv_lanes(cpu_line: str) -> int:
+    """SIMD width of OpenCV's dispatched SIFT kernels: 16 when the AVX512_SKX dispatch is taken
+    (a '*' marks an available dispatched feature in getCPUFeaturesLine), else 8 (AVX2)."""
+    return 16 if "*AVX512-SKX" in cpu_line.split() else 8
+
+
+def write_meta(path):
+    """What produced the goldens: the SIMD width changes angles/descriptors at the ulp level
+    (opencv-sift-4.8.md §13), so tests must reproduce the goldens' width, not the test host's."""
+    import cv2
+    import numpy as np
+
+    line = cv2.getCPUFeaturesLine()
+    cpu = ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next((l.split(":", 1)[1].strip() for l in f if l.startswith("model name")), "")
+    except OSError:
+        pass
+    meta = {
+        "wheel": "opencv-contrib-python-headless==4.8.0.76",
+        "opencv": cv2.__version__,
+        "numpy": np.__version__,
+        "cpu_model": cpu,
+        "opencv_cpu_features": line,
+        "opencv_simd_lanes": opencv_lanes(line),
+        "frames": ["%06d" % i for i in FRAMES],
+        "sift": "cv2.SIFT_create(nfeatures=1500).detectAndCompute(cv2.imread(path, 0), None)",
+    }
+    os.makedirs(os.path.dirname(path), exist_ok=True)
+    with open(path, "w") as f:
+        json.dump(meta, f, indent=1)
+        f.write("\n")
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--dataset", default=os.path.join(ROOT, "tests", "fixtures", "mykitti"))
@@ -177,6 +213,7 @@ def main(argv=None) -> int:
     if cv2.__version__ != OPENCV_VERSION:
         print("need opencv-contrib-python-headless==4.8.0.76 (have %s)" % cv2.__version__, file=sys.stderr)
         return 1
+    write_meta(os.path.join(a.out, "meta.json"))
     run_worker(a.dataset, os.path.join(a.out, "ipp"), ipp=True)
     run_worker(a.dataset, os.path.join(a.out, "noipp"), ipp=False)
     gen_get_info(a.dataset, a.label, os.path.join(a.out, "get_info.jsonl"), a.draws, a.seed)
