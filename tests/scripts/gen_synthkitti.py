@@ -404,21 +404,27 @@ class Renderer:
         tbest[gm] = tg[gm]
         hit[gm] = -2
 
-        Rinv = R.T
-        cam_pos = t
+        # visible boxes, nearest first, so boxes hidden behind nearer ones are skipped whole
+        todo = []
         for bi, b in enumerate(self.boxes):
-            cx, cy, cz, hx, hy, hz, yaw = b[:7]
-            # cull far boxes
+            cx, cy, cz = b[0], b[1], b[2]
             if np.hypot(cx - ox, cz - oz) > 170.0:
                 continue
-            corners = self.box_corners(b)
-            cc = (corners - cam_pos) @ Rinv.T  # world -> camera
+            cc = (self.box_corners(b) - t) @ R  # world -> camera (R^T (p - t))
             if np.all(cc[:, 2] < 0.05):
                 continue
             rect = self.screen_rect(cc)
             if rect is None:
                 continue
+            # ray parameter = camera depth, and depth is linear: the box's minimum is at a corner
+            todo.append((max(float(cc[:, 2].min()), 0.0), bi, rect))
+        todo.sort()
+        for zmin, bi, rect in todo:
+            b = self.boxes[bi]
+            cx, cy, cz, hx, hy, hz, yaw = b[:7]
             r0, r1, c0, c1 = rect
+            if tbest[r0:r1, c0:c1].max() <= zmin:
+                continue
             c, s = np.float32(np.cos(yaw)), np.float32(np.sin(yaw))
             sx_ = dwx[r0:r1, c0:c1]
             sy_ = dwy[r0:r1, c0:c1]
