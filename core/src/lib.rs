@@ -7,6 +7,8 @@
 //! the lab's commands draw ([`render`]). The CLI and the web app only load
 //! input, call this crate and show what it returns.
 
+#[cfg(feature = "cli")]
+pub mod cli;
 pub mod dataset;
 pub mod error;
 pub mod image;

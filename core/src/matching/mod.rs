@@ -1,1 +1,14 @@
-//! Brute-force matching and the lab's strategies (being written).
+//! Matching as the lab does it: `cv2.BFMatcher()` (L2, brute force, k-NN),
+//! the dt / nn / nndr strategies, `matching_info`, and the explanation of a
+//! result for the app.
+
+pub mod distance;
+pub mod explain;
+pub mod info;
+pub mod knn;
+pub mod strategy;
+
+pub use explain::{explain, mistaken_answers, Explanation, Mistake, Verdict};
+pub use info::{matching_info, MatchInfo};
+pub use knn::{knn_match, DMatch};
+pub use strategy::{match_all, match_feature, Strategy};

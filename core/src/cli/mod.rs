@@ -1,0 +1,298 @@
+//! The `siftlab` command line: the lab's `run_odometry.py` interface
+//! (`get_info`, `view_feature`, `view_info`, `view_trajectory`) plus `sift`.
+//! Arguments are checked here with messages that say what to do; the work is
+//! done by the library.
+
+pub mod trajectory;
+pub mod visual;
+
+use crate::error::{Error, Result};
+use crate::image::GrayImage;
+use crate::matching::{match_feature, matching_info, MatchInfo, Strategy};
+use crate::pyfmt::{py_float, py_str};
+use crate::sift::{detect_and_compute, Features, SiftParams};
+use clap::{Args, Parser, Subcommand};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+#[derive(Parser, Debug)]
+#[command(name = "siftlab", version, about = "The COMP24011 feature-matching lab (OpenCV 4.8 SIFT) in Rust")]
+pub struct Cli {
+    /// The MyKITTI dataset folder (gray/00/image_0/NNNNNN.png, poses/00.txt).
+    #[arg(short = 'd', long = "dataset", default_value = "~/MyKITTI")]
+    pub dataset: String,
+    /// SIMD width OpenCV's SIFT ran with on the reference machine (8 = AVX2,
+    /// 16 = AVX-512); default: what OpenCV would use on this CPU.
+    #[arg(long = "opencv-lanes", value_parser = ["8", "16"], global = true)]
+    pub opencv_lanes: Option<String>,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Print matching_info for one feature of frame FRAME_ID-1 matched into FRAME_ID.
+    #[command(name = "get_info")]
+    GetInfo(MatchArgs),
+    /// Write opencv_visual.png: both frames, lines from the feature to its matches.
+    #[command(name = "view_feature")]
+    ViewFeature(MatchArgs),
+    /// Write custom_visual.png: opencv_visual.png above the frames with matching_info circles.
+    #[command(name = "view_info")]
+    ViewInfo(MatchArgs),
+    /// Run the lab's monocular visual odometry and write trajectory.png.
+    #[command(name = "view_trajectory")]
+    ViewTrajectory(TrajectoryArgs),
+    /// Run SIFT on one image: "N keypoints in T ms", or everything as JSON.
+    Sift(SiftArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct MatchArgs {
+    /// Matching strategy.
+    #[arg(short = 'a', long = "algorithm", value_parser = ["dt", "nn", "nndr"])]
+    pub algo: String,
+    /// Threshold: a distance for dt/nn, a ratio in [0, 1] for nndr.
+    #[arg(short = 't', long = "threshold", allow_negative_numbers = true)]
+    pub threshold: Option<String>,
+    /// The current frame (>= 1); frame FRAME_ID-1 is the previous one.
+    #[arg(allow_negative_numbers = true)]
+    pub frame_id: String,
+    /// The feature (keypoint index) of the previous frame.
+    #[arg(allow_negative_numbers = true)]
+    pub feature_id: String,
+}
+
+#[derive(Args, Debug)]
+pub struct TrajectoryArgs {
+    /// Run up to this frame (default: every frame of the dataset).
+    pub frame_id: Option<String>,
+    /// Also write the estimated poses in KITTI format (12 numbers a line).
+    #[arg(long = "save-poses")]
+    pub save_poses: Option<PathBuf>,
+    /// Where to write the plot.
+    #[arg(long = "output", default_value = "trajectory.png")]
+    pub output: PathBuf,
+}
+
+#[derive(Args, Debug)]
+pub struct SiftArgs {
+    /// A PNG or JPEG image.
+    pub image: PathBuf,
+    /// Print keypoints and descriptors as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Runs the CLI; returns the process exit code.
+pub fn main() -> i32 {
+    let cli = Cli::parse();
+    match run(&cli) {
+        Ok(()) => 0,
+        Err(e) => {
+            eprintln!("siftlab: error: {e}");
+            1
+        }
+    }
+}
+
+fn sift_params(cli: &Cli) -> SiftParams {
+    match cli.opencv_lanes.as_deref() {
+        Some("16") => SiftParams { opencv_lanes: 16, ..SiftParams::default() },
+        Some(_) => SiftParams::default(),
+        None => SiftParams::for_host(),
+    }
+}
+
+pub fn run(cli: &Cli) -> Result<()> {
+    match &cli.command {
+        Command::GetInfo(a) => {
+            let (info, _) = run_match(cli, a, "get_info")?;
+            let mut out = std::io::stdout().lock();
+            let _ = writeln!(out, "ret value: {info}");
+            let _ = writeln!(out, "ret count: 3");
+            Ok(())
+        }
+        Command::ViewFeature(a) => {
+            let (info, ctx) = run_match(cli, a, "view_feature")?;
+            visual::view_feature(&ctx, &info, Path::new("opencv_visual.png"))
+        }
+        Command::ViewInfo(a) => {
+            let (info, ctx) = run_match(cli, a, "view_info")?;
+            visual::view_info(&ctx, &info, Path::new("custom_visual.png"))
+        }
+        Command::ViewTrajectory(a) => {
+            let frames = match &a.frame_id {
+                None => None,
+                Some(s) => Some(parse_index(s, "FRAME_ID")?),
+            };
+            let root = expand_home(&cli.dataset);
+            let mut last = std::time::Instant::now();
+            let mut progress = |done: usize, total: usize| {
+                if done == total || last.elapsed().as_millis() >= 100 {
+                    last = std::time::Instant::now();
+                    let w = 40;
+                    let filled = if total == 0 { w } else { done * w / total };
+                    eprint!("\r[{}{}] {done}/{total} frames", "#".repeat(filled), " ".repeat(w - filled));
+                    if done == total {
+                        eprintln!();
+                    }
+                }
+            };
+            let text = trajectory::view_trajectory(&root, frames, a.save_poses.as_deref(), &a.output, &mut progress)?;
+            println!("{text}");
+            Ok(())
+        }
+        Command::Sift(a) => run_sift(cli, a),
+    }
+}
+
+/// Everything the visual commands need besides the result tuple.
+pub struct MatchContext {
+    pub prev_image: GrayImage,
+    pub cur_image: GrayImage,
+    pub prev: Features,
+    pub cur: Features,
+    pub feature: usize,
+    pub matches: Vec<crate::matching::DMatch>,
+}
+
+fn parse_index(s: &str, what: &str) -> Result<usize> {
+    let v: i64 = s.trim().parse().map_err(|_| {
+        Error::InvalidArgument(format!("{what} must be a whole number, got '{s}'"))
+    })?;
+    if v < 0 {
+        return Err(Error::InvalidArgument(format!("{what} must be >= 0, got {v}")));
+    }
+    Ok(v as usize)
+}
+
+fn parse_threshold(s: &Option<String>) -> Result<Option<f64>> {
+    match s {
+        None => Ok(None),
+        Some(s) => s.trim().parse::<f64>().map(Some).map_err(|_| {
+            Error::InvalidArgument(format!("threshold must be a number, got '{s}'"))
+        }),
+    }
+}
+
+/// `~` expands like the lab's `os.path.expanduser`.
+fn expand_home(p: &str) -> PathBuf {
+    if let Some(rest) = p.strip_prefix("~") {
+        if rest.is_empty() || rest.starts_with('/') {
+            if let Some(home) = std::env::var_os("HOME") {
+                return PathBuf::from(format!("{}{rest}", home.to_string_lossy()));
+            }
+        }
+    }
+    PathBuf::from(p)
+}
+
+/// The lab's frame file: `gray/00/image_0/%06d.png` under the dataset.
+pub fn frame_path(root: &Path, id: usize) -> PathBuf {
+    root.join("gray").join("00").join("image_0").join(format!("{id:06}.png"))
+}
+
+fn load_frame(root: &Path, id: usize) -> Result<GrayImage> {
+    let path = frame_path(root, id);
+    let bytes = std::fs::read(&path).map_err(|e| {
+        if !root.is_dir() {
+            Error::Dataset(format!(
+                "dataset folder {} not found: pass the MyKITTI folder with -d (it holds gray/00/image_0/ and poses/00.txt)",
+                root.display()
+            ))
+        } else {
+            Error::Dataset(format!(
+                "cannot read frame {id}: {} ({e}); the dataset needs gray/00/image_0/{id:06}.png",
+                path.display()
+            ))
+        }
+    })?;
+    GrayImage::decode(&bytes).map_err(|e| Error::Decode(format!("frame {} : {e}", path.display())))
+}
+
+fn run_match(cli: &Cli, a: &MatchArgs, name: &str) -> Result<(MatchInfo, MatchContext)> {
+    let threshold = parse_threshold(&a.threshold)?;
+    let strategy = Strategy::parse(&a.algo, threshold)?;
+    let frame = parse_index(&a.frame_id, "FRAME_ID")?;
+    if frame < 1 {
+        return Err(Error::InvalidArgument(
+            "FRAME_ID must be >= 1: frames FRAME_ID-1 and FRAME_ID are matched".into(),
+        ));
+    }
+    let feature = parse_index(&a.feature_id, "FEATURE_ID")?;
+    let t_repr = threshold.map_or("None".to_string(), py_float);
+    println!("vo params: ({}, {t_repr}, {})", py_str(&a.algo), py_str(&cli.dataset));
+    println!("debug run: {name}({frame}, {feature})");
+    let _ = std::io::stdout().flush();
+
+    let root = expand_home(&cli.dataset);
+    let params = sift_params(cli);
+    let prev_image = load_frame(&root, frame - 1)?;
+    let cur_image = load_frame(&root, frame)?;
+    eprintln!("Processing frame {}", frame - 1);
+    let prev = detect_and_compute(&prev_image, &params);
+    eprintln!("Processing frame {frame}");
+    let cur = detect_and_compute(&cur_image, &params);
+    let matches = match_feature(&strategy, &prev, &cur, feature).map_err(|e| match e {
+        Error::InvalidArgument(m) if m.starts_with("feature id") => Error::InvalidArgument(format!(
+            "FEATURE_ID {feature} is out of range: frame {} has {} keypoints (valid: 0 to {})",
+            frame - 1,
+            prev.keypoints.len(),
+            prev.keypoints.len().saturating_sub(1)
+        )),
+        other => other,
+    })?;
+    let info = matching_info(&prev.keypoints, &cur.keypoints, &matches);
+    Ok((info, MatchContext { prev_image, cur_image, prev, cur, feature, matches }))
+}
+
+fn run_sift(cli: &Cli, a: &SiftArgs) -> Result<()> {
+    let bytes = std::fs::read(&a.image).map_err(|e| {
+        Error::Dataset(format!("cannot read {}: {e}", a.image.display()))
+    })?;
+    let img = GrayImage::decode(&bytes)?;
+    let params = sift_params(cli);
+    let t0 = std::time::Instant::now();
+    let f = detect_and_compute(&img, &params);
+    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut out = std::io::BufWriter::new(std::io::stdout().lock());
+    if a.json {
+        write_json(&mut out, &img, &f).map_err(|e| Error::Dataset(format!("cannot write output: {e}")))?;
+    } else {
+        let _ = writeln!(out, "{} keypoints in {ms:.1} ms", f.keypoints.len());
+    }
+    let _ = out.flush();
+    Ok(())
+}
+
+/// Floats as Rust's shortest round-trip f32 text, so a reader parsing them
+/// as float32 gets the exact bits back.
+fn write_json(out: &mut impl Write, img: &GrayImage, f: &Features) -> std::io::Result<()> {
+    write!(out, "{{\"width\":{},\"height\":{},\"keypoints\":[", img.width(), img.height())?;
+    for (i, k) in f.keypoints.iter().enumerate() {
+        if i > 0 {
+            out.write_all(b",")?;
+        }
+        write!(
+            out,
+            "{{\"x\":{:?},\"y\":{:?},\"size\":{:?},\"angle\":{:?},\"response\":{:?},\"octave\":{}}}",
+            k.x, k.y, k.size, k.angle, k.response, k.octave
+        )?;
+    }
+    out.write_all(b"],\"descriptors\":[")?;
+    for (i, d) in f.descriptors.iter().enumerate() {
+        if i > 0 {
+            out.write_all(b",")?;
+        }
+        out.write_all(b"[")?;
+        for (j, v) in d.iter().enumerate() {
+            if j > 0 {
+                out.write_all(b",")?;
+            }
+            write!(out, "{v}")?;
+        }
+        out.write_all(b"]")?;
+    }
+    out.write_all(b"]}\n")
+}
