@@ -1,0 +1,5 @@
+//! The SIFT web worker (loaded by `worker.js` as a module worker).
+
+fn main() {
+    siftlab_app::worker::start();
+}

@@ -1,0 +1,273 @@
+//! The page side of the SIFT workers: a small pool (one worker per frame slot,
+//! since the two frames of a pair are independent), a request queue for the
+//! start-up window, and a cache of finished frames keyed by the file's content.
+
+use crate::msg::{FromWorker, SiftResult, ToWorker};
+use siftlab_core::sift::Features;
+use std::cell::RefCell;
+use std::collections::{HashMap, VecDeque};
+use std::sync::Arc;
+use wasm_bindgen::prelude::*;
+use wasm_bindgen::JsCast;
+
+/// One analysed frame: the gray image SIFT saw and its features.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameData {
+    /// What the user loaded (file name or `gray/00/image_0/000001.png`).
+    pub label: String,
+    pub width: usize,
+    pub height: usize,
+    pub gray: Vec<u8>,
+    pub features: Features,
+    pub decode_ms: f64,
+    pub sift_ms: f64,
+    /// The file's bytes, to re-run SIFT when the OpenCV SIMD width changes.
+    pub bytes: Arc<Vec<u8>>,
+    pub lanes: usize,
+}
+
+pub type Frame = Arc<FrameData>;
+
+impl FrameData {
+    pub fn from_result(label: String, r: SiftResult, bytes: Arc<Vec<u8>>, lanes: usize) -> Self {
+        FrameData {
+            bytes,
+            lanes,
+            label,
+            width: r.width,
+            height: r.height,
+            gray: r.gray,
+            features: r.features,
+            decode_ms: r.decode_ms,
+            sift_ms: r.sift_ms,
+        }
+    }
+}
+
+/// FNV-1a over the bytes and the SIMD width: the cache key (same file content
+/// and parameters → same features).
+pub fn content_key(bytes: &[u8], lanes: usize) -> u64 {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325 ^ lanes as u64;
+    for &b in bytes {
+        h ^= b as u64;
+        h = h.wrapping_mul(0x0100_0000_01b3);
+    }
+    h ^ (bytes.len() as u64).rotate_left(32)
+}
+
+type Progress = Box<dyn Fn(String)>;
+type Done = Box<dyn FnOnce(Result<SiftResult, String>)>;
+
+struct Waiter {
+    progress: Progress,
+    done: Done,
+}
+
+struct Job {
+    key: u64,
+    slot: usize,
+    waiters: Vec<Waiter>,
+}
+
+struct Slot {
+    worker: web_sys::Worker,
+    ready: bool,
+    queue: VecDeque<JsValue>,
+    load: usize,
+    // Keeps the JS callbacks alive as long as the worker.
+    _handlers: Vec<Closure<dyn FnMut(JsValue)>>,
+}
+
+#[derive(Default)]
+struct Pool {
+    script: String,
+    slots: Vec<Slot>,
+    next_id: u32,
+    jobs: HashMap<u32, Job>,
+    in_flight: HashMap<u64, u32>,
+    cache: HashMap<u64, SiftResult>,
+}
+
+thread_local! {
+    static POOL: RefCell<Pool> = RefCell::new(Pool {
+        script: "./worker.js".into(),
+        ..Default::default()
+    });
+}
+
+/// Number of workers: one per frame of a pair.
+const WORKERS: usize = 2;
+
+fn spawn(index: usize, script: &str) -> Result<Slot, String> {
+    let opts = web_sys::WorkerOptions::new();
+    opts.set_type(web_sys::WorkerType::Module);
+    let worker = web_sys::Worker::new_with_options(script, &opts)
+        .map_err(|e| format!("cannot start the SIFT worker: {e:?}"))?;
+    let on_message = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
+        let data = ev.unchecked_into::<web_sys::MessageEvent>().data();
+        match FromWorker::from_js(&data) {
+            Ok(m) => on_worker_message(index, m),
+            Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
+        }
+    });
+    let on_error = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
+        // A failed load or a panic (wasm aborts): the instance is unusable.
+        if let Some(e) = ev.dyn_ref::<web_sys::ErrorEvent>() {
+            e.prevent_default();
+        }
+        on_worker_crash(index);
+    });
+    worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+    worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
+    Ok(Slot { worker, ready: false, queue: VecDeque::new(), load: 0, _handlers: vec![on_message, on_error] })
+}
+
+fn on_worker_message(index: usize, m: FromWorker) {
+    match m {
+        FromWorker::Ready => {
+            let queued: Vec<(web_sys::Worker, JsValue)> = POOL.with(|p| {
+                let mut p = p.borrow_mut();
+                let Some(slot) = p.slots.get_mut(index) else { return vec![] };
+                slot.ready = true;
+                let w = slot.worker.clone();
+                slot.queue.drain(..).map(|m| (w.clone(), m)).collect()
+            });
+            for (w, m) in queued {
+                let _ = w.post_message(&m);
+            }
+        }
+        FromWorker::Progress { id, stage } => with_progress(id, &stage),
+        FromWorker::Done { id, result } => finish(id, Ok(result)),
+        FromWorker::Failed { id, message } => finish(id, Err(message)),
+    }
+}
+
+fn with_progress(id: u32, stage: &str) {
+    // Take the waiters out, call them, put them back: no borrow is held while
+    // user callbacks run.
+    let waiters = POOL.with(|p| p.borrow_mut().jobs.get_mut(&id).map(|j| std::mem::take(&mut j.waiters)));
+    let Some(waiters) = waiters else { return };
+    for w in &waiters {
+        (w.progress)(stage.to_string());
+    }
+    POOL.with(|p| {
+        if let Some(j) = p.borrow_mut().jobs.get_mut(&id) {
+            let mut added = std::mem::take(&mut j.waiters);
+            j.waiters = waiters;
+            j.waiters.append(&mut added);
+        }
+    });
+}
+
+fn finish(id: u32, r: Result<SiftResult, String>) {
+    let job = POOL.with(|p| {
+        let mut p = p.borrow_mut();
+        let job = p.jobs.remove(&id)?;
+        p.in_flight.remove(&job.key);
+        if let Some(s) = p.slots.get_mut(job.slot) {
+            s.load = s.load.saturating_sub(1);
+        }
+        if let Ok(res) = &r {
+            p.cache.insert(job.key, res.clone());
+        }
+        Some(job)
+    });
+    if let Some(job) = job {
+        for w in job.waiters {
+            (w.done)(r.clone());
+        }
+    }
+}
+
+fn on_worker_crash(index: usize) {
+    let failed: Vec<u32> = POOL.with(|p| {
+        let mut p = p.borrow_mut();
+        let script = p.script.clone();
+        if let Ok(fresh) = spawn(index, &script) {
+            if let Some(old) = p.slots.get_mut(index) {
+                old.worker.terminate();
+                *old = fresh;
+            }
+        }
+        p.jobs.iter().filter(|(_, j)| j.slot == index).map(|(id, _)| *id).collect()
+    });
+    for id in failed {
+        finish(
+            id,
+            Err("the SIFT worker stopped unexpectedly (out of memory?); it was restarted, try again".into()),
+        );
+    }
+}
+
+/// Where the worker script lives (tests point it elsewhere).
+pub fn set_worker_script(url: &str) {
+    POOL.with(|p| p.borrow_mut().script = url.to_string());
+}
+
+/// A frame already analysed with these exact bytes, if any.
+pub fn cached(bytes: &[u8], lanes: usize) -> Option<SiftResult> {
+    let key = content_key(bytes, lanes);
+    POOL.with(|p| p.borrow().cache.get(&key).cloned())
+}
+
+/// Stores a result computed elsewhere (tests, or a frame analysed in-process).
+pub fn insert_cache(bytes: &[u8], lanes: usize, r: SiftResult) {
+    let key = content_key(bytes, lanes);
+    POOL.with(|p| {
+        p.borrow_mut().cache.insert(key, r);
+    });
+}
+
+/// Runs SIFT on `bytes` in a worker. `done` is called exactly once (immediately
+/// on a cache hit); identical requests in flight share one computation.
+pub fn sift(
+    bytes: Vec<u8>,
+    lanes: usize,
+    progress: impl Fn(String) + 'static,
+    done: impl FnOnce(Result<SiftResult, String>) + 'static,
+) {
+    let key = content_key(&bytes, lanes);
+    if let Some(hit) = POOL.with(|p| p.borrow().cache.get(&key).cloned()) {
+        done(Ok(hit));
+        return;
+    }
+    let waiter = Waiter { progress: Box::new(progress), done: Box::new(done) };
+    let started: Result<Option<(web_sys::Worker, JsValue)>, (String, Waiter)> = POOL.with(|p| {
+        let mut p = p.borrow_mut();
+        if let Some(id) = p.in_flight.get(&key).copied() {
+            if let Some(job) = p.jobs.get_mut(&id) {
+                job.waiters.push(waiter);
+                return Ok(None);
+            }
+        }
+        while p.slots.len() < WORKERS {
+            let i = p.slots.len();
+            let script = p.script.clone();
+            match spawn(i, &script) {
+                Ok(s) => p.slots.push(s),
+                Err(e) => return Err((e, waiter)),
+            }
+        }
+        let slot = (0..p.slots.len()).min_by_key(|&i| p.slots[i].load).unwrap_or(0);
+        p.next_id = p.next_id.wrapping_add(1);
+        let id = p.next_id;
+        p.jobs.insert(id, Job { key, slot, waiters: vec![waiter] });
+        p.in_flight.insert(key, id);
+        let msg = ToWorker::Sift { id, bytes, lanes: lanes as u32 }.to_js();
+        let s = &mut p.slots[slot];
+        s.load += 1;
+        if s.ready {
+            Ok(Some((s.worker.clone(), msg)))
+        } else {
+            s.queue.push_back(msg);
+            Ok(None)
+        }
+    });
+    match started {
+        Ok(Some((w, msg))) => {
+            let _ = w.post_message(&msg);
+        }
+        Ok(None) => {}
+        Err((e, w)) => (w.done)(Err(e)),
+    }
+}

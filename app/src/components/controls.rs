@@ -1,0 +1,120 @@
+//! Strategy, threshold (slider + box), feature id, keypoint toggle.
+
+use crate::state::{parse_threshold, Lab, Which};
+use leptos::prelude::*;
+
+#[component]
+pub fn Controls() -> impl IntoView {
+    let lab = expect_context::<Lab>();
+    let is_nndr = move || lab.algo.get() == "nndr";
+    let range_max = move || if is_nndr() { "1" } else { "500" };
+    let range_step = move || if is_nndr() { "0.01" } else { "1" };
+    let slider_value = move || {
+        parse_threshold(&lab.threshold()).ok().flatten().map(|t| t.to_string()).unwrap_or_else(|| "0".into())
+    };
+    let count = move || lab.frame(Which::Prev).with(|f| f.as_ref().map(|f| f.features.keypoints.len()));
+    let step_feature = move |delta: i64| {
+        let n = count().unwrap_or(0) as i64;
+        if n == 0 {
+            return;
+        }
+        let f = lab.feature().map(|f| f as i64).unwrap_or(0);
+        lab.set_feature((f + delta).clamp(0, n - 1) as usize);
+    };
+    view! {
+        <section class="card controls" aria-label="Matching parameters">
+            <h2>"2 · Strategy"</h2>
+            <div class="control-row">
+                <label class="ctl">
+                    <span>"Strategy (-a)"</span>
+                    <select
+                        data-testid="algo"
+                        prop:value=move || lab.algo.get()
+                        on:change=move |ev| lab.algo.set(event_target_value(&ev))
+                    >
+                        <option value="dt">"dt — distance threshold"</option>
+                        <option value="nn">"nn — nearest neighbour"</option>
+                        <option value="nndr">"nndr — nearest-neighbour distance ratio"</option>
+                    </select>
+                </label>
+                <label class="ctl">
+                    <span>
+                        "Threshold (-t) "
+                        <span class="muted">
+                            {move || match lab.algo.get().as_str() {
+                                "nndr" => "0 … 1",
+                                "nn" => "0 … 500, empty = none",
+                                _ => "0 … 500",
+                            }}
+                        </span>
+                    </span>
+                    <div class="threshold">
+                        <input
+                            type="range"
+                            min="0"
+                            aria-label="threshold slider"
+                            max=range_max
+                            step=range_step
+                            prop:value=slider_value
+                            prop:disabled=move || lab.threshold().trim().is_empty() && lab.algo.get() == "nn"
+                            on:input=move |ev| lab.set_threshold(event_target_value(&ev))
+                        />
+                        <input
+                            type="text"
+                            inputmode="decimal"
+                            class="num"
+                            data-testid="threshold"
+                            placeholder="none"
+                            prop:value=move || lab.threshold()
+                            on:input=move |ev| lab.set_threshold(event_target_value(&ev))
+                        />
+                    </div>
+                </label>
+                <label class="ctl">
+                    <span>
+                        "Feature id "
+                        <span class="muted">{move || count().map(|n| format!("0 … {}", n.saturating_sub(1))).unwrap_or_default()}</span>
+                    </span>
+                    <div class="feature">
+                        <button aria-label="previous feature" on:click=move |_| step_feature(-1)>"‹"</button>
+                        <input
+                            type="number"
+                            min="0"
+                            class="num"
+                            data-testid="feature"
+                            max=move || count().map(|n| n.saturating_sub(1).to_string()).unwrap_or_default()
+                            prop:value=move || lab.feature_text.get()
+                            on:input=move |ev| lab.feature_text.set(event_target_value(&ev))
+                        />
+                        <button aria-label="next feature" on:click=move |_| step_feature(1)>"›"</button>
+                    </div>
+                </label>
+                <label class="ctl check">
+                    <input
+                        type="checkbox"
+                        data-testid="show-all"
+                        prop:checked=move || lab.show_all.get()
+                        on:change=move |ev| lab.show_all.set(event_target_checked(&ev))
+                    />
+                    " show all keypoints"
+                </label>
+            </div>
+            <p class="cli muted">
+                "Same as: "
+                <code data-testid="cli-equivalent">
+                    {move || {
+                        let t = lab.threshold();
+                        let t = t.trim();
+                        format!(
+                            "siftlab get_info -a {}{} {} {}",
+                            lab.algo.get(),
+                            if t.is_empty() { String::new() } else { format!(" -t {t}") },
+                            lab.frame_id.get(),
+                            lab.feature_text.get().trim()
+                        )
+                    }}
+                </code>
+            </p>
+        </section>
+    }
+}

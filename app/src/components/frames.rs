@@ -1,0 +1,209 @@
+//! The two frames side by side as `cv2.drawMatchesKnn` lays them out, with the
+//! selected keypoint (scale and orientation), lines to its matches, and the
+//! green `view_info` circles at the `matching_info` coordinates.
+
+use crate::client::Frame;
+use crate::state::{nearest_keypoint, Lab, Which};
+use leptos::prelude::*;
+use siftlab_core::sift::KeyPoint;
+use wasm_bindgen::{Clamped, JsCast};
+
+/// Colours of successive match lines (drawMatchesKnn picks random ones; these
+/// stay readable on gray).
+const PALETTE: [&str; 6] = ["#ff5a36", "#2f9bff", "#ffcc00", "#c04dff", "#00d1b2", "#ff7ac6"];
+
+/// (width of the previous frame, total width, height) of the composite.
+pub fn layout(prev: Option<&Frame>, cur: Option<&Frame>) -> (usize, usize, usize) {
+    let w1 = prev.map(|f| f.width).or(cur.map(|f| f.width)).unwrap_or(1241);
+    let w2 = cur.map(|f| f.width).unwrap_or(w1);
+    let h = prev.map(|f| f.height).max(cur.map(|f| f.height)).unwrap_or(376);
+    (w1, w1 + w2, h)
+}
+
+fn draw(canvas: &web_sys::HtmlCanvasElement, prev: Option<&Frame>, cur: Option<&Frame>) {
+    let (w1, w, h) = layout(prev, cur);
+    canvas.set_width(w as u32);
+    canvas.set_height(h as u32);
+    let Some(ctx) = canvas
+        .get_context("2d")
+        .ok()
+        .flatten()
+        .and_then(|c| c.dyn_into::<web_sys::CanvasRenderingContext2d>().ok())
+    else {
+        return;
+    };
+    ctx.set_fill_style_str("#1b1e24");
+    ctx.fill_rect(0.0, 0.0, w as f64, h as f64);
+    for (f, x0) in [(prev, 0usize), (cur, w1)] {
+        let Some(f) = f else { continue };
+        let mut rgba = Vec::with_capacity(f.gray.len() * 4);
+        for &g in &f.gray {
+            rgba.extend_from_slice(&[g, g, g, 255]);
+        }
+        if let Ok(img) = web_sys::ImageData::new_with_u8_clamped_array_and_sh(Clamped(&rgba), f.width as u32, f.height as u32) {
+            let _ = ctx.put_image_data(&img, x0 as f64, 0.0);
+        }
+    }
+}
+
+/// One SVG path drawing every keypoint as a circle of radius size/2 (one
+/// element instead of thousands keeps the toggle instant).
+fn keypoint_path(kps: &[KeyPoint], dx: f64) -> String {
+    let mut d = String::with_capacity(kps.len() * 40);
+    for k in kps {
+        let r = (k.size as f64 / 2.0).max(1.0);
+        let (x, y) = (k.x as f64 + dx, k.y as f64);
+        d.push_str(&format!("M{:.1} {:.1}a{r:.1} {r:.1} 0 1 0 {:.1} 0a{r:.1} {r:.1} 0 1 0 {:.1} 0", x - r, y, 2.0 * r, -2.0 * r));
+    }
+    d
+}
+
+#[component]
+pub fn FramesView() -> impl IntoView {
+    let lab = expect_context::<Lab>();
+    let canvas_ref = NodeRef::<leptos::html::Canvas>::new();
+    Effect::new(move |_| {
+        let (p, c) = (lab.prev.get(), lab.cur.get());
+        if let Some(canvas) = canvas_ref.get() {
+            draw(&canvas, p.as_ref(), c.as_ref());
+        }
+    });
+    let dims = move || {
+        let (p, c) = (lab.prev.get(), lab.cur.get());
+        layout(p.as_ref(), c.as_ref())
+    };
+    let view_box = move || {
+        let (_, w, h) = dims();
+        format!("0 0 {w} {h}")
+    };
+    let kp_count = move |w: Which| lab.frame(w).with(|f| f.as_ref().map(|f| f.features.keypoints.len()).unwrap_or(0));
+    let select_at = move |ev: web_sys::MouseEvent| {
+        let Some(el) = ev.current_target().and_then(|t| t.dyn_into::<web_sys::Element>().ok()) else { return };
+        let r = el.get_bounding_client_rect();
+        if r.width() <= 0.0 || r.height() <= 0.0 {
+            return;
+        }
+        let (w1, w, h) = dims();
+        let x = (ev.client_x() as f64 - r.left()) * w as f64 / r.width();
+        let y = (ev.client_y() as f64 - r.top()) * h as f64 / r.height();
+        if x < w1 as f64 {
+            if let Some(i) = lab.prev.with_untracked(|p| p.as_ref().and_then(|p| nearest_keypoint(&p.features.keypoints, x, y))) {
+                lab.set_feature(i);
+            }
+        }
+    };
+    let on_key = move |ev: web_sys::KeyboardEvent| {
+        let n = kp_count(Which::Prev);
+        if n == 0 {
+            return;
+        }
+        let f = lab.feature().unwrap_or(0) as i64;
+        let next = match ev.key().as_str() {
+            "ArrowRight" | "ArrowDown" => f + 1,
+            "ArrowLeft" | "ArrowUp" => f - 1,
+            "PageDown" => f + 10,
+            "PageUp" => f - 10,
+            "Home" => 0,
+            "End" => n as i64 - 1,
+            _ => return,
+        };
+        ev.prevent_default();
+        lab.set_feature(next.clamp(0, n as i64 - 1) as usize);
+    };
+
+    let all_keypoints = move || {
+        if !lab.show_all.get() {
+            return None;
+        }
+        let (w1, _, _) = dims();
+        let p = lab.prev.with(|p| p.as_ref().map(|p| keypoint_path(&p.features.keypoints, 0.0))).unwrap_or_default();
+        let c = lab.cur.with(|c| c.as_ref().map(|c| keypoint_path(&c.features.keypoints, w1 as f64))).unwrap_or_default();
+        Some(view! {
+            <path d=p class="kp-all"/>
+            <path d=c class="kp-all"/>
+        })
+    };
+
+    let selection = move || {
+        let a = lab.analysis.get()?.ok()?;
+        let (w1, _, _) = dims();
+        let p = lab.prev.get()?;
+        let c = lab.cur.get()?;
+        let q = *p.features.keypoints.get(a.feature)?;
+        let r = (q.size as f64 / 2.0).max(2.0);
+        // drawKeypoints' rich flag: the orientation line from the centre at `angle` degrees (image y points down).
+        let ang = (q.angle as f64).to_radians();
+        let (ox, oy) = (q.x as f64 + r * ang.cos(), q.y as f64 + r * ang.sin());
+        let info = &a.explanation.info;
+        let has_matches = !a.explanation.matches.is_empty();
+        let lines = a
+            .explanation
+            .matches
+            .iter()
+            .enumerate()
+            .filter_map(|(i, m)| {
+                let k = c.features.keypoints.get(m.train_idx)?;
+                let col = PALETTE[i % PALETTE.len()];
+                Some(view! {
+                    <line x1=q.x x2=k.x as f64 + w1 as f64 y1=q.y y2=k.y stroke=col class="match-line"/>
+                    <circle cx=k.x as f64 + w1 as f64 cy=k.y r="4" stroke=col class="match-end"/>
+                })
+            })
+            .collect_view();
+        let circles = has_matches.then(|| {
+            let pts = info
+                .points
+                .iter()
+                .map(|&(x, y)| view! { <circle cx=x as f64 + w1 as f64 cy=y as f64 r="10" class="info-circle"/> })
+                .collect_view();
+            view! {
+                <circle cx=info.query.0 as f64 cy=info.query.1 as f64 r="10" class="info-circle"/>
+                {pts}
+            }
+        });
+        Some(view! {
+            {lines}
+            {circles}
+            <circle cx=q.x cy=q.y r=r class="kp-sel"/>
+            <line x1=q.x y1=q.y x2=ox y2=oy class="kp-sel-ori"/>
+            <circle cx=q.x cy=q.y r="1.5" class="kp-sel-dot"/>
+        })
+    };
+
+    view! {
+        <section class="card frames" aria-label="Frames">
+            <div class="frames-head">
+                <h2>"3 · The two frames"</h2>
+                <p class="muted legend">
+                    <span class="sw sw-sel"></span>" selected keypoint (circle = scale, line = orientation) "
+                    <span class="sw sw-line"></span>" lines to its matches (drawMatchesKnn) "
+                    <span class="sw sw-info"></span>" matching_info points (view_info) · "
+                    "click the left frame to pick the nearest keypoint"
+                </p>
+            </div>
+            <div class="frames-labels muted">
+                <span>{move || lab.prev.with(|p| p.as_ref().map(|p| format!("previous: {}", p.label)).unwrap_or_else(|| "previous frame".into()))}</span>
+                <span>{move || lab.cur.with(|c| c.as_ref().map(|c| format!("current: {}", c.label)).unwrap_or_else(|| "current frame".into()))}</span>
+            </div>
+            <div
+                class="stage"
+                tabindex="0"
+                role="application"
+                aria-label="Frames; left and right arrow keys change the selected feature"
+                on:keydown=on_key
+            >
+                <canvas node_ref=canvas_ref data-testid="frames-canvas"></canvas>
+                <svg
+                    class="overlay"
+                    data-testid="overlay"
+                    viewBox=view_box
+                    preserveAspectRatio="none"
+                    on:click=select_at
+                >
+                    {all_keypoints}
+                    {selection}
+                </svg>
+            </div>
+        </section>
+    }
+}

@@ -1,0 +1,134 @@
+//! The page, in the order of the lab's tasks: load frames, pick the strategy,
+//! look at the frames, read the result, follow the explanation, check yourself.
+
+mod check;
+mod controls;
+mod explain;
+mod frames;
+mod load;
+mod result;
+
+pub use check::{Exercises, SelfCheck};
+pub use controls::Controls;
+pub use explain::{DescriptorGrid, DistanceChart, Explanation};
+pub use frames::FramesView;
+pub use load::{Loader, Status};
+pub use result::ResultPanel;
+
+use crate::loading;
+use crate::state::{Lab, Source};
+use crate::urlstate::UrlState;
+use leptos::prelude::*;
+
+/// The whole explorer for a given state (tests mount this with their own `Lab`).
+#[component]
+pub fn Explorer(lab: Lab) -> impl IntoView {
+    provide_context(lab);
+    view! {
+        <header class="top">
+            <h1>"siftlab"<span class="sub">" — feature matching, step by step"</span></h1>
+            <p class="tag">
+                "The COMP24011 lab's "<code>"get_info"</code>" in your browser: OpenCV 4.8's SIFT (nfeatures=1500), "
+                "brute-force L2 matching and the dt / nn / nndr strategies, computed here by siftlab's core. "
+                "Nothing leaves this page."
+            </p>
+        </header>
+        <main>
+            <Loader/>
+            <Status/>
+            <Controls/>
+            <FramesView/>
+            <div class="columns">
+                <ResultPanel/>
+                <Explanation/>
+            </div>
+            <div class="columns">
+                <SelfCheck/>
+                <Exercises/>
+            </div>
+        </main>
+        <footer>
+            <p>
+                "siftlab reproduces the lab's reference (Python + OpenCV 4.8.0.76) bit for bit; "
+                "the tuple above is what "<code>"siftlab get_info"</code>" prints on the same frames. "
+                "Keyboard: Tab to the frames, ←/→ to step through features, PgUp/PgDn by 10."
+            </p>
+        </footer>
+    }
+}
+
+fn current_query() -> String {
+    web_sys::window().and_then(|w| w.location().search().ok()).unwrap_or_default()
+}
+
+/// Applies a link's state to a fresh `Lab` and starts loading what it names.
+pub fn apply_url(lab: Lab, st: &UrlState) {
+    if let Some(a) = st.algo.as_deref().filter(|a| matches!(*a, "dt" | "nn" | "nndr")) {
+        lab.algo.set(a.to_string());
+    }
+    if let Some(t) = &st.t {
+        lab.set_threshold(t.clone());
+    } else if st.algo.as_deref() == Some("nn") {
+        lab.set_threshold(String::new());
+    }
+    if let Some(f) = st.feature {
+        lab.set_feature(f);
+    }
+    if let Some(l) = st.lanes.filter(|l| matches!(l, 8 | 16)) {
+        lab.lanes.set(l as usize);
+    }
+    if let Some(seed) = st.ex {
+        lab.ex_seed.set(Some(seed));
+        lab.ex_q.set(st.q.unwrap_or(1).max(1));
+    }
+    match st.src.as_deref() {
+        Some("folder") => {
+            if let Some(f) = st.frame {
+                lab.frame_id.set(f);
+            }
+            lab.load_error.set(Some(format!(
+                "this link refers to frames of a MyKITTI folder (FRAME_ID {}): open the folder to continue",
+                st.frame.unwrap_or(1)
+            )));
+        }
+        _ => loading::load_demo(lab, st.frame),
+    }
+}
+
+/// The URL for the current state (what "share this view" links to).
+pub fn url_state(lab: Lab) -> UrlState {
+    let source = lab.source.get();
+    let linkable = !matches!(source, Source::Files);
+    let algo = lab.algo.get();
+    let t = lab.threshold();
+    UrlState {
+        src: source.url_name().map(str::to_string),
+        frame: linkable.then(|| lab.frame_id.get()),
+        feature: lab.feature(),
+        t: if t.trim().is_empty() { None } else { Some(t.trim().to_string()) },
+        algo: Some(algo),
+        ex: lab.ex_seed.get(),
+        q: lab.ex_seed.get().map(|_| lab.ex_q.get()),
+        lanes: Some(lab.lanes.get() as u32).filter(|&l| l != 8),
+    }
+}
+
+/// The app as the page mounts it: state from the URL, the demo by default, and
+/// the URL kept in step with every change (replaceState: no history spam).
+#[component]
+pub fn App() -> impl IntoView {
+    let lab = Lab::new();
+    apply_url(lab, &UrlState::from_query(&current_query()));
+    Effect::new(move |_| {
+        let q = url_state(lab).to_query();
+        if let Some(w) = web_sys::window() {
+            let path = w.location().pathname().unwrap_or_default();
+            if q != current_query() {
+                if let Ok(h) = w.history() {
+                    let _ = h.replace_state_with_url(&wasm_bindgen::JsValue::NULL, "", Some(&format!("{path}{q}")));
+                }
+            }
+        }
+    });
+    view! { <Explorer lab=lab/> }
+}

@@ -1,0 +1,267 @@
+//! Getting frame bytes to the SIFT worker: the demo (fetched from our own
+//! origin), single files (picker or drop), or a MyKITTI folder (directory
+//! picker). Failures become an inline message; what was loaded stays.
+
+use crate::client::{self, FrameData};
+use crate::state::{Job, Lab, Source, Which};
+use crate::worker::now_ms;
+use leptos::prelude::*;
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::sync::Arc;
+use wasm_bindgen::JsCast;
+use wasm_bindgen_futures::JsFuture;
+
+/// Files larger than this are refused before reading: no PNG/JPEG below the
+/// core's pixel limit is anywhere near it.
+pub const MAX_FILE_BYTES: f64 = 200.0 * 1024.0 * 1024.0;
+
+/// The lab's layout inside a MyKITTI folder (`run_odometry.py`'s `%06d.png`).
+pub fn frame_path(id: u32) -> String {
+    format!("gray/00/image_0/{id:06}.png")
+}
+
+/// The frame id of a path inside a MyKITTI folder, if it is one of its frames.
+pub fn frame_id_of(path: &str) -> Option<u32> {
+    let rest = path.rsplit_once("gray/00/image_0/")?.1;
+    let digits = rest.strip_suffix(".png")?;
+    if digits.len() == 6 && digits.bytes().all(|b| b.is_ascii_digit()) {
+        digits.parse().ok()
+    } else {
+        None
+    }
+}
+
+thread_local! {
+    static FOLDER: RefCell<BTreeMap<u32, web_sys::File>> = const { RefCell::new(BTreeMap::new()) };
+}
+
+static NEXT_JOB: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+
+fn start_job(lab: Lab, what: String, stage: &str) -> u64 {
+    let id = NEXT_JOB.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    lab.jobs.update(|j| j.push(Job { id, what, stage: stage.into(), started_ms: now_ms() }));
+    id
+}
+
+fn job_stage(lab: Lab, id: u64, stage: String) {
+    lab.jobs.update(|j| {
+        if let Some(job) = j.iter_mut().find(|j| j.id == id) {
+            job.stage = stage;
+        }
+    });
+}
+
+fn end_job(lab: Lab, id: u64) {
+    lab.jobs.update(|j| j.retain(|j| j.id != id));
+}
+
+fn bump(lab: Lab, which: Which) -> u64 {
+    let i = which as usize;
+    let mut g = 0;
+    lab.generation.update(|gen| {
+        gen[i] += 1;
+        g = gen[i];
+    });
+    g
+}
+
+fn is_current(lab: Lab, which: Which, g: u64) -> bool {
+    lab.generation.with_untracked(|gen| gen[which as usize] == g)
+}
+
+/// Analyses `bytes` as the frame `which`; on success it replaces that frame,
+/// on failure the message is shown and the old frame stays.
+pub fn load_bytes(lab: Lab, which: Which, label: String, bytes: Vec<u8>) {
+    load_bytes_gen(lab, which, label, bytes, bump(lab, which));
+}
+
+fn load_bytes_gen(lab: Lab, which: Which, label: String, bytes: Vec<u8>, g: u64) {
+    let job = start_job(lab, format!("{}: {label}", which.name()), "queued");
+    let done_label = label.clone();
+    let lanes = lab.lanes.get_untracked();
+    let kept = Arc::new(bytes.clone());
+    client::sift(
+        bytes,
+        lanes,
+        move |stage| job_stage(lab, job, stage),
+        move |r| {
+            end_job(lab, job);
+            if !is_current(lab, which, g) {
+                return;
+            }
+            match r {
+                Ok(res) => {
+                    lab.frame(which).set(Some(Arc::new(FrameData::from_result(done_label, res, kept, lanes))));
+                }
+                Err(e) => lab.load_error.set(Some(format!("{} ({label}): {e}", which.name()))),
+            }
+        },
+    );
+}
+
+async fn fetch_bytes(url: &str) -> Result<Vec<u8>, String> {
+    let window = web_sys::window().ok_or("no window")?;
+    let resp = JsFuture::from(window.fetch_with_str(url)).await.map_err(|e| format!("cannot fetch {url}: {e:?}"))?;
+    let resp: web_sys::Response = resp.dyn_into().map_err(|_| "fetch did not return a Response".to_string())?;
+    if !resp.ok() {
+        return Err(format!("{url}: HTTP {}", resp.status()));
+    }
+    let buf = JsFuture::from(resp.array_buffer().map_err(|e| format!("{e:?}"))?)
+        .await
+        .map_err(|e| format!("cannot read {url}: {e:?}"))?;
+    Ok(js_sys::Uint8Array::new(&buf).to_vec())
+}
+
+async fn fetch_text(url: &str) -> Result<String, String> {
+    let b = fetch_bytes(url).await?;
+    String::from_utf8(b).map_err(|_| format!("{url} is not text"))
+}
+
+/// Reads a user's file, refusing absurd sizes before touching the bytes.
+pub async fn read_file(file: &web_sys::File) -> Result<Vec<u8>, String> {
+    if file.size() > MAX_FILE_BYTES {
+        return Err(format!(
+            "the file is {:.0} MB; siftlab reads images up to {:.0} MB (and {} pixels)",
+            file.size() / 1048576.0,
+            MAX_FILE_BYTES / 1048576.0,
+            siftlab_core::image::MAX_PIXELS
+        ));
+    }
+    let buf = JsFuture::from(file.array_buffer()).await.map_err(|e| format!("cannot read the file: {e:?}"))?;
+    Ok(js_sys::Uint8Array::new(&buf).to_vec())
+}
+
+/// A file picked or dropped for one slot.
+pub fn load_file(lab: Lab, which: Which, file: web_sys::File) {
+    let g = bump(lab, which);
+    let name = file.name();
+    leptos::task::spawn_local(async move {
+        let job = start_job(lab, format!("{}: {name}", which.name()), "reading the file");
+        let bytes = read_file(&file).await;
+        end_job(lab, job);
+        match bytes {
+            Ok(b) => {
+                lab.source.set(Source::Files);
+                load_bytes_gen(lab, which, name, b, g);
+            }
+            Err(e) => lab.load_error.set(Some(format!("{} ({name}): {e}", which.name()))),
+        }
+    });
+}
+
+/// Loads the pair (FRAME_ID-1, FRAME_ID) from the current source.
+pub fn load_pair(lab: Lab, frame_id: u32) {
+    let source = lab.source.get_untracked();
+    if frame_id < 1 {
+        lab.load_error.set(Some("FRAME_ID must be at least 1: frames FRAME_ID-1 and FRAME_ID are matched".into()));
+        return;
+    }
+    let missing: Vec<String> = [frame_id - 1, frame_id]
+        .iter()
+        .filter(|id| !source.frames().contains(id))
+        .map(|&id| frame_path(id))
+        .collect();
+    if !missing.is_empty() {
+        let where_ = match source {
+            Source::Demo(_) => "the demo",
+            _ => "the folder",
+        };
+        lab.load_error.set(Some(format!("{} missing from {where_}: cannot match FRAME_ID {frame_id}", missing.join(" and "))));
+        return;
+    }
+    lab.frame_id.set(frame_id);
+    for (which, id) in [(Which::Prev, frame_id - 1), (Which::Cur, frame_id)] {
+        let g = bump(lab, which);
+        let path = frame_path(id);
+        let source = source.clone();
+        leptos::task::spawn_local(async move {
+            let job = start_job(lab, format!("{}: {path}", which.name()), "reading the file");
+            let bytes = match source {
+                Source::Demo(_) => fetch_bytes(&format!("demo/{path}")).await,
+                _ => match FOLDER.with(|f| f.borrow().get(&id).cloned()) {
+                    Some(file) => read_file(&file).await,
+                    None => Err("the frame is no longer available; open the folder again".into()),
+                },
+            };
+            end_job(lab, job);
+            match bytes {
+                Ok(b) => load_bytes_gen(lab, which, path, b, g),
+                Err(e) => lab.load_error.set(Some(format!("{} ({path}): {e}", which.name()))),
+            }
+        });
+    }
+}
+
+/// The demo: `demo/index.txt` lists the frame ids, `demo/ATTRIBUTION.txt` says
+/// where they come from (shown next to the button).
+pub fn load_demo(lab: Lab, frame_id: Option<u32>) {
+    leptos::task::spawn_local(async move {
+        let job = start_job(lab, "demo".into(), "reading the demo index");
+        let index = fetch_text("demo/index.txt").await;
+        if let Ok(a) = fetch_text("demo/ATTRIBUTION.txt").await {
+            lab.attribution.set(a.trim().to_string());
+        }
+        end_job(lab, job);
+        let ids: Vec<u32> = match index {
+            Ok(t) => t.lines().filter_map(|l| l.trim().parse().ok()).collect(),
+            Err(e) => {
+                lab.load_error.set(Some(format!("cannot load the demo: {e}")));
+                return;
+            }
+        };
+        if ids.len() < 2 {
+            lab.load_error.set(Some("the demo needs at least two frames".into()));
+            return;
+        }
+        let fid = frame_id.filter(|f| ids.contains(f) && ids.contains(&(f.wrapping_sub(1)))).unwrap_or(ids[1]);
+        lab.source.set(Source::Demo(ids));
+        load_pair(lab, fid);
+    });
+}
+
+/// The files of a directory picker: keeps the frames in the lab's layout.
+pub fn open_folder(lab: Lab, files: web_sys::FileList, frame_id: Option<u32>) {
+    let mut frames = BTreeMap::new();
+    let mut any = false;
+    for i in 0..files.length() {
+        if let Some(f) = files.get(i) {
+            any = true;
+            let path = js_sys::Reflect::get(&f, &"webkitRelativePath".into())
+                .ok()
+                .and_then(|v| v.as_string())
+                .filter(|p| !p.is_empty())
+                .unwrap_or_else(|| f.name());
+            if let Some(id) = frame_id_of(&path) {
+                frames.insert(id, f);
+            }
+        }
+    }
+    if !any {
+        return;
+    }
+    if frames.is_empty() {
+        lab.load_error.set(Some(
+            "this folder is not in the MyKITTI layout: no gray/00/image_0/NNNNNN.png frames found \
+             (open the folder that contains gray/ and poses/)"
+                .into(),
+        ));
+        return;
+    }
+    let ids: Vec<u32> = frames.keys().copied().collect();
+    FOLDER.with(|f| *f.borrow_mut() = frames);
+    let fid = frame_id.unwrap_or_else(|| ids.iter().copied().find(|&i| i >= 1 && ids.contains(&(i - 1))).unwrap_or(1));
+    lab.source.set(Source::Folder(ids));
+    load_pair(lab, fid);
+}
+
+/// Re-runs SIFT on the loaded frames (after the SIMD width changed).
+pub fn reanalyse(lab: Lab) {
+    for which in [Which::Prev, Which::Cur] {
+        if let Some(f) = lab.frame(which).get_untracked() {
+            if f.lanes != lab.lanes.get_untracked() {
+                load_bytes(lab, which, f.label.clone(), f.bytes.as_ref().clone());
+            }
+        }
+    }
+}

@@ -1,0 +1,208 @@
+//! The messages between the page and the SIFT worker, typed on both sides.
+//!
+//! They cross `postMessage` as plain JS objects whose bulky parts are typed
+//! arrays (the gray pixels, the keypoint floats, the descriptor bytes), so the
+//! structured clone copies a few flat buffers instead of thousands of objects.
+//! Keypoint fields travel as f32 and the octave as i32: exactly the types the
+//! core computes, so nothing is rounded on the way.
+
+use js_sys::{Float32Array, Int32Array, Object, Reflect, Uint8Array};
+use siftlab_core::sift::{Features, KeyPoint};
+use wasm_bindgen::{JsCast, JsValue};
+
+/// Page → worker.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ToWorker {
+    /// Decode `bytes` (PNG/JPEG) as the core does and run SIFT with the lab's
+    /// parameters; `lanes` is OpenCV's SIMD width to reproduce (8 = AVX2, 16 = AVX-512).
+    Sift { id: u32, bytes: Vec<u8>, lanes: u32 },
+}
+
+/// What SIFT produced for one frame, plus the gray image it ran on.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SiftResult {
+    pub width: usize,
+    pub height: usize,
+    pub gray: Vec<u8>,
+    pub features: Features,
+    pub decode_ms: f64,
+    pub sift_ms: f64,
+}
+
+/// Worker → page.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FromWorker {
+    /// The worker's wasm is initialised and it listens.
+    Ready,
+    /// A job reached a new stage (shown to the user as progress).
+    Progress { id: u32, stage: String },
+    Done { id: u32, result: SiftResult },
+    /// A user-facing message (the core's `Error` Display).
+    Failed { id: u32, message: String },
+}
+
+fn set(o: &Object, k: &str, v: &JsValue) {
+    // Setting a property on a fresh plain object cannot fail.
+    let _ = Reflect::set(o, &JsValue::from_str(k), v);
+}
+
+fn get(o: &JsValue, k: &str) -> Result<JsValue, String> {
+    Reflect::get(o, &JsValue::from_str(k)).map_err(|_| format!("message has no field {k}"))
+}
+
+fn get_u32(o: &JsValue, k: &str) -> Result<u32, String> {
+    get(o, k)?.as_f64().map(|v| v as u32).ok_or_else(|| format!("message field {k} is not a number"))
+}
+
+fn get_f64(o: &JsValue, k: &str) -> Result<f64, String> {
+    get(o, k)?.as_f64().ok_or_else(|| format!("message field {k} is not a number"))
+}
+
+fn get_str(o: &JsValue, k: &str) -> Result<String, String> {
+    get(o, k)?.as_string().ok_or_else(|| format!("message field {k} is not a string"))
+}
+
+fn get_bytes(o: &JsValue, k: &str) -> Result<Vec<u8>, String> {
+    get(o, k)?
+        .dyn_into::<Uint8Array>()
+        .map(|a| a.to_vec())
+        .map_err(|_| format!("message field {k} is not a Uint8Array"))
+}
+
+fn kind(o: &JsValue) -> Result<String, String> {
+    get_str(o, "type")
+}
+
+impl ToWorker {
+    pub fn to_js(&self) -> JsValue {
+        let o = Object::new();
+        match self {
+            ToWorker::Sift { id, bytes, lanes } => {
+                set(&o, "type", &"sift".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "lanes", &(*lanes).into());
+                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
+            }
+        }
+        o.into()
+    }
+
+    pub fn from_js(v: &JsValue) -> Result<Self, String> {
+        match kind(v)?.as_str() {
+            "sift" => Ok(ToWorker::Sift {
+                id: get_u32(v, "id")?,
+                bytes: get_bytes(v, "bytes")?,
+                lanes: get_u32(v, "lanes")?,
+            }),
+            other => Err(format!("unknown message type {other:?}")),
+        }
+    }
+}
+
+/// Keypoint floats per keypoint in the `kp` array: x, y, size, angle, response.
+const KP_FLOATS: usize = 5;
+
+impl FromWorker {
+    pub fn to_js(&self) -> JsValue {
+        let o = Object::new();
+        match self {
+            FromWorker::Ready => set(&o, "type", &"ready".into()),
+            FromWorker::Progress { id, stage } => {
+                set(&o, "type", &"progress".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "stage", &stage.as_str().into());
+            }
+            FromWorker::Failed { id, message } => {
+                set(&o, "type", &"failed".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "message", &message.as_str().into());
+            }
+            FromWorker::Done { id, result } => {
+                set(&o, "type", &"done".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "width", &(result.width as u32).into());
+                set(&o, "height", &(result.height as u32).into());
+                set(&o, "gray", &Uint8Array::from(result.gray.as_slice()).into());
+                let kps = &result.features.keypoints;
+                let mut f = Vec::with_capacity(kps.len() * KP_FLOATS);
+                let mut oct = Vec::with_capacity(kps.len());
+                for k in kps {
+                    f.extend_from_slice(&[k.x, k.y, k.size, k.angle, k.response]);
+                    oct.push(k.octave);
+                }
+                set(&o, "kp", &Float32Array::from(f.as_slice()).into());
+                set(&o, "octave", &Int32Array::from(oct.as_slice()).into());
+                let desc: Vec<u8> = result.features.descriptors.iter().flatten().copied().collect();
+                set(&o, "desc", &Uint8Array::from(desc.as_slice()).into());
+                set(&o, "decodeMs", &result.decode_ms.into());
+                set(&o, "siftMs", &result.sift_ms.into());
+            }
+        }
+        o.into()
+    }
+
+    pub fn from_js(v: &JsValue) -> Result<Self, String> {
+        match kind(v)?.as_str() {
+            "ready" => Ok(FromWorker::Ready),
+            "progress" => Ok(FromWorker::Progress { id: get_u32(v, "id")?, stage: get_str(v, "stage")? }),
+            "failed" => Ok(FromWorker::Failed { id: get_u32(v, "id")?, message: get_str(v, "message")? }),
+            "done" => {
+                let width = get_u32(v, "width")? as usize;
+                let height = get_u32(v, "height")? as usize;
+                let gray = get_bytes(v, "gray")?;
+                if gray.len() != width * height {
+                    return Err(format!("gray buffer has {} bytes for {width}x{height}", gray.len()));
+                }
+                let kp = get(v, "kp")?
+                    .dyn_into::<Float32Array>()
+                    .map_err(|_| "message field kp is not a Float32Array".to_string())?
+                    .to_vec();
+                let octave = get(v, "octave")?
+                    .dyn_into::<Int32Array>()
+                    .map_err(|_| "message field octave is not an Int32Array".to_string())?
+                    .to_vec();
+                let desc = get_bytes(v, "desc")?;
+                let n = octave.len();
+                if kp.len() != n * KP_FLOATS || desc.len() != n * 128 {
+                    return Err(format!(
+                        "inconsistent SIFT message: {n} octaves, {} floats, {} descriptor bytes",
+                        kp.len(),
+                        desc.len()
+                    ));
+                }
+                let keypoints = kp
+                    .chunks_exact(KP_FLOATS)
+                    .zip(&octave)
+                    .map(|(f, &octave)| KeyPoint {
+                        x: f[0],
+                        y: f[1],
+                        size: f[2],
+                        angle: f[3],
+                        response: f[4],
+                        octave,
+                    })
+                    .collect();
+                let descriptors = desc
+                    .chunks_exact(128)
+                    .map(|c| {
+                        let mut d = [0u8; 128];
+                        d.copy_from_slice(c);
+                        d
+                    })
+                    .collect();
+                Ok(FromWorker::Done {
+                    id: get_u32(v, "id")?,
+                    result: SiftResult {
+                        width,
+                        height,
+                        gray,
+                        features: Features { keypoints, descriptors },
+                        decode_ms: get_f64(v, "decodeMs")?,
+                        sift_ms: get_f64(v, "siftMs")?,
+                    },
+                })
+            }
+            other => Err(format!("unknown message type {other:?}")),
+        }
+    }
+}
