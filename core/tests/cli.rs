@@ -1,0 +1,378 @@
+//! The `siftlab` binary end to end: `get_info` against OpenCV goldens, `sift --json`
+//! against the SIFT goldens, and every bad input the issue lists.
+
+#![cfg(not(target_arch = "wasm32"))]
+
+mod json_mini;
+
+use siftlab_core::matching::{match_feature, matching_info, Strategy};
+use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
+use siftlab_core::GrayImage;
+
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn fixtures() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures")
+}
+
+fn dataset() -> PathBuf {
+    fixtures().join("mykitti")
+}
+
+fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The SIMD width OpenCV's SIFT kernels ran with where the goldens were written
+/// (spec §13), from `golden/meta.json`; the CLI would otherwise follow the host's CPU.
+fn golden_lanes() -> usize {
+    let meta = fs::read_to_string(fixtures().join("golden/meta.json")).expect("golden/meta.json");
+    let meta = json_mini::parse(&meta).expect("meta.json is JSON");
+    meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("meta.json: opencv_simd_lanes") as usize
+}
+
+fn golden_lanes_args() -> [String; 2] {
+    ["--opencv-lanes".into(), golden_lanes().to_string()]
+}
+
+fn siftlab_in(dir: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_siftlab"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("cannot start the siftlab binary")
+}
+
+fn siftlab(args: &[&str]) -> Output {
+    siftlab_in(&repo_root(), args)
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh scratch directory per test (no tempfile crate in the core).
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("siftlab-cli-{}-{name}", std::process::id()));
+    let _ = fs::remove_dir_all(&dir);
+    fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Asserts a clean failure: non-zero exit, no panic, a message on stderr that
+/// contains every one of `words` (case-insensitive), nothing on stdout after the
+/// header lines.
+fn assert_fails(o: &Output, words: &[&str], what: &str) {
+    let err = stderr(o);
+    assert!(!o.status.success(), "{what}: exit status {:?} should be a failure\nstderr: {err}", o.status);
+    assert_ne!(o.status.code(), Some(101), "{what}: exit code 101 is Rust's panic code\nstderr: {err}");
+    assert!(!err.contains("panicked"), "{what}: panicked\nstderr: {err}");
+    assert!(!err.contains("RUST_BACKTRACE"), "{what}: panicked\nstderr: {err}");
+    let lower = err.to_lowercase();
+    for w in words {
+        assert!(lower.contains(&w.to_lowercase()), "{what}: stderr does not mention {w:?}\nstderr: {err}");
+    }
+    assert!(!stdout(o).contains("ret value"), "{what}: printed a result anyway\nstdout: {}", stdout(o));
+}
+
+// ---------------------------------------------------------------------------
+// get_info against OpenCV
+
+/// Our features of fixture frame `frame` (golden SIFT parameters), once per test binary.
+fn library_features(frame: usize) -> std::sync::Arc<Features> {
+    use std::sync::{Arc, Mutex, OnceLock};
+    static CACHE: OnceLock<Mutex<Vec<Option<Arc<Features>>>>> = OnceLock::new();
+    let mut cache = CACHE.get_or_init(Default::default).lock().unwrap();
+    if cache.len() <= frame {
+        cache.resize(frame + 1, None);
+    }
+    cache[frame]
+        .get_or_insert_with(|| {
+            let bytes = fs::read(dataset().join(format!("gray/00/image_0/{frame:06}.png"))).unwrap();
+            let img = GrayImage::decode(&bytes).unwrap();
+            Arc::new(detect_and_compute(&img, &SiftParams { opencv_lanes: golden_lanes(), ..SiftParams::default() }))
+        })
+        .clone()
+}
+
+/// Each line of `tests/fixtures/golden/get_info.jsonl` (tests/scripts/gen_goldens.py)
+/// holds one `get_info` call on the committed frames, `{"dataset_frame", "feature",
+/// "algo", "threshold"}`, and the exact stdout the lab's Python + OpenCV printed for
+/// `-d tests/fixtures/mykitti`, so the CLI runs from the repository root with that path.
+///
+/// The binary must print the lab's `vo params`, `debug run` and `ret count` lines
+/// exactly, and as `ret value` exactly what the library gives (golden.rs compares the
+/// library with OpenCV on every draw; the default wheel's IPP can move a distance in
+/// rare draws, spec §14). Every process runs SIFT twice, so this runs the binary on
+/// every 12th draw plus every `nn` draw without a threshold.
+#[test]
+fn get_info_prints_exactly_what_the_lab_prints() {
+    let path = fixtures().join("golden/get_info.jsonl");
+    let text = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let (mut n, mut identical) = (0, 0);
+    let mut failures = Vec::new();
+    for (lineno, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
+        let rec = json_mini::parse(line).unwrap_or_else(|e| panic!("line {}: {e}", lineno + 1));
+        let no_threshold = rec.get("threshold") == Some(&json_mini::Json::Null);
+        if lineno % 12 != 0 && !no_threshold {
+            continue;
+        }
+        let field = |k: &str| rec.get(k).unwrap_or_else(|| panic!("line {}: no {k:?}", lineno + 1));
+        let algo = field("algo").str().expect("algo is a string").to_owned();
+        let mut argv: Vec<String> = vec!["-d".into(), "tests/fixtures/mykitti".into(), "get_info".into()];
+        argv.extend(golden_lanes_args());
+        argv.extend(["-a".into(), algo.clone()]);
+        let threshold = match field("threshold") {
+            json_mini::Json::Null => None,
+            // The number's JSON text is Python's repr of the float the lab parsed.
+            json_mini::Json::Num(t) => {
+                argv.extend(["-t".into(), t.clone()]);
+                Some(t.parse::<f64>().unwrap())
+            }
+            other => panic!("line {}: bad threshold {other:?}", lineno + 1),
+        };
+        let frame = field("dataset_frame").i64().expect("dataset_frame") as usize;
+        let feature = field("feature").i64().expect("feature") as usize;
+        argv.extend([frame.to_string(), feature.to_string()]);
+        let golden = field("stdout").str().expect("stdout is a string");
+
+        let (prev, cur) = (library_features(frame - 1), library_features(frame));
+        let s = Strategy::parse(&algo, threshold).unwrap();
+        let m = match_feature(&s, &prev, &cur, feature).unwrap();
+        let library = matching_info(&prev.keypoints, &cur.keypoints, &m).to_string();
+        let expected: String = golden
+            .lines()
+            .map(|l| if l.starts_with("ret value: ") { format!("ret value: {library}\n") } else { format!("{l}\n") })
+            .collect();
+
+        let argv_ref: Vec<&str> = argv.iter().map(String::as_str).collect();
+        let o = siftlab_in(&repo_root(), &argv_ref);
+        assert!(o.status.success(), "siftlab {argv:?} failed: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"));
+        let got = stdout(&o);
+        if got != expected {
+            failures.push(format!("siftlab {}\n--- expected\n{expected}--- siftlab\n{got}", argv.join(" ")));
+        }
+        identical += (got == golden) as usize;
+        n += 1;
+    }
+    eprintln!("get_info CLI: {n} runs; {identical} byte-identical to the lab's stdout");
+    assert!(n >= 30, "only {n} get_info goldens run");
+    assert!(failures.is_empty(), "{} of {n} get_info outputs differ:\n{}", failures.len(), failures.join("\n"));
+}
+
+// ---------------------------------------------------------------------------
+// sift --json against the OpenCV (IPP disabled) goldens
+
+fn first_golden_frame() -> String {
+    let dir = fixtures().join("golden/noipp");
+    let mut ids: Vec<String> = fs::read_dir(&dir)
+        .unwrap()
+        .filter_map(|e| e.ok()?.path().file_stem()?.to_str().map(str::to_owned))
+        .collect();
+    ids.sort();
+    ids.into_iter().next().expect("no noipp goldens")
+}
+
+#[test]
+fn sift_json_round_trips_opencv_values_bit_exactly() {
+    let id = first_golden_frame();
+    let frame = dataset().join(format!("gray/00/image_0/{id}.png"));
+    let lanes = golden_lanes().to_string();
+    let o = siftlab(&["--opencv-lanes", &lanes, "sift", frame.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "sift --json failed: {}", stderr(&o));
+    let doc = json_mini::parse(stdout(&o).trim()).expect("sift --json is not valid JSON");
+
+    let golden = fs::read(fixtures().join(format!("golden/noipp/{id}.sift"))).unwrap();
+    let u32_at = |o: usize| u32::from_le_bytes(golden[o..o + 4].try_into().unwrap());
+    let f32_at = |o: usize| f32::from_le_bytes(golden[o..o + 4].try_into().unwrap());
+    let n = u32_at(16) as usize;
+    assert_eq!(doc.get("width").and_then(|v| v.i64()), Some(u32_at(8) as i64));
+    assert_eq!(doc.get("height").and_then(|v| v.i64()), Some(u32_at(12) as i64));
+    let kps = doc.get("keypoints").and_then(|v| v.arr()).expect("keypoints array");
+    let descs = doc.get("descriptors").and_then(|v| v.arr()).expect("descriptors array");
+    assert_eq!((kps.len(), descs.len()), (n, n), "keypoint/descriptor counts");
+    for (i, kp) in kps.iter().enumerate() {
+        let o = 20 + i * 24;
+        for (j, key) in ["x", "y", "size", "angle", "response"].iter().enumerate() {
+            let got = kp.get(key).and_then(|v| v.f32()).unwrap_or_else(|| panic!("kp {i} {key}"));
+            let want = f32_at(o + 4 * j);
+            assert_eq!(got.to_bits(), want.to_bits(), "{id} kp {i} {key}: {got:?} vs OpenCV {want:?}");
+        }
+        assert_eq!(kp.get("octave").and_then(|v| v.i64()), Some(u32_at(o + 20) as i32 as i64), "kp {i} octave");
+    }
+    let dbase = 20 + n * 24;
+    for (i, d) in descs.iter().enumerate() {
+        let got: Vec<i64> = d.arr().expect("descriptor row").iter().map(|v| v.i64().unwrap()).collect();
+        let want: Vec<i64> = golden[dbase + 128 * i..dbase + 128 * (i + 1)].iter().map(|&b| b as i64).collect();
+        assert_eq!(got, want, "{id} descriptor {i}");
+    }
+}
+
+#[test]
+fn sift_plain_prints_count_and_time() {
+    let id = first_golden_frame();
+    let frame = dataset().join(format!("gray/00/image_0/{id}.png"));
+    let o = siftlab(&["sift", frame.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = stdout(&o);
+    let golden = fs::read(fixtures().join(format!("golden/noipp/{id}.sift"))).unwrap();
+    let n = u32::from_le_bytes(golden[16..20].try_into().unwrap());
+    let line = out.trim_end();
+    let rest = line
+        .strip_prefix(&format!("{n} keypoints in "))
+        .unwrap_or_else(|| panic!("unexpected output {line:?}, want \"{n} keypoints in T ms\""));
+    let t = rest.strip_suffix(" ms").unwrap_or_else(|| panic!("no ' ms' in {line:?}"));
+    assert!(t.parse::<f64>().map(|v| v >= 0.0).unwrap_or(false), "bad time {t:?}");
+}
+
+// ---------------------------------------------------------------------------
+// bad input: one clear message, non-zero exit, no panic
+
+fn ds_arg() -> String {
+    dataset().to_str().unwrap().to_owned()
+}
+
+#[test]
+fn missing_dataset_is_reported() {
+    let o = siftlab(&["-d", "/nonexistent/MyKITTI", "get_info", "-a", "nn", "1", "0"]);
+    assert_fails(&o, &["/nonexistent/MyKITTI"], "missing dataset");
+}
+
+#[test]
+fn frame_id_zero_is_rejected() {
+    let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", "nn", "0", "0"]);
+    assert_fails(&o, &["frame"], "FRAME_ID 0");
+}
+
+#[test]
+fn frame_beyond_the_dataset_is_reported() {
+    let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", "nn", "99999", "0"]);
+    // The previous frame (99998) is read first; either name is a clear message.
+    assert_fails(&o, &["9999", ".png"], "missing frame file");
+}
+
+#[test]
+fn feature_out_of_range_is_rejected() {
+    let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", "nn", "1", "1500"]);
+    assert_fails(&o, &["feature", "1500"], "FEATURE_ID 1500");
+}
+
+#[test]
+fn nndr_threshold_above_one_is_rejected() {
+    let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", "nndr", "-t", "1.5", "1", "0"]);
+    assert_fails(&o, &["threshold", "1.5"], "nndr -t 1.5");
+}
+
+#[test]
+fn negative_threshold_is_rejected() {
+    for algo in ["dt", "nn", "nndr"] {
+        let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", algo, "-t", "-5", "1", "0"]);
+        assert_fails(&o, &["threshold"], &format!("{algo} -t -5"));
+    }
+}
+
+#[test]
+fn nan_threshold_is_rejected() {
+    for algo in ["dt", "nn", "nndr"] {
+        let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", algo, "-t", "nan", "1", "0"]);
+        assert_fails(&o, &["threshold"], &format!("{algo} -t nan"));
+    }
+}
+
+#[test]
+fn dt_and_nndr_need_a_threshold() {
+    for algo in ["dt", "nndr"] {
+        let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", algo, "1", "0"]);
+        assert_fails(&o, &["threshold"], &format!("{algo} without -t"));
+    }
+}
+
+#[test]
+fn unknown_strategy_is_rejected() {
+    let o = siftlab(&["-d", &ds_arg(), "get_info", "-a", "knn", "-t", "1", "1", "0"]);
+    assert_fails(&o, &["knn"], "-a knn");
+}
+
+/// A dataset whose frames 0 and 1 are the given byte strings.
+fn dataset_with(name: &str, f0: &[u8], f1: &[u8]) -> PathBuf {
+    let root = scratch(name);
+    let frames = root.join("gray/00/image_0");
+    fs::create_dir_all(&frames).unwrap();
+    fs::create_dir_all(root.join("poses")).unwrap();
+    fs::write(frames.join("000000.png"), f0).unwrap();
+    fs::write(frames.join("000001.png"), f1).unwrap();
+    fs::copy(dataset().join("poses/00.txt"), root.join("poses/00.txt")).unwrap();
+    root
+}
+
+fn fixture_frame(id: u32) -> Vec<u8> {
+    fs::read(dataset().join(format!("gray/00/image_0/{id:06}.png"))).unwrap()
+}
+
+fn png(w: u32, h: u32, f: impl Fn(u32, u32) -> u8) -> Vec<u8> {
+    let buf: Vec<u8> = (0..h).flat_map(|y| (0..w).map(move |x| (x, y))).map(|(x, y)| f(x, y)).collect();
+    let mut out = std::io::Cursor::new(Vec::new());
+    image::write_buffer_with_format(&mut out, &buf, w, h, image::ExtendedColorType::L8, image::ImageFormat::Png)
+        .unwrap();
+    out.into_inner()
+}
+
+#[test]
+fn non_image_frame_is_reported() {
+    let root = dataset_with("nonimage", b"this is not a PNG file\n", &fixture_frame(1));
+    let o = siftlab(&["-d", root.to_str().unwrap(), "get_info", "-a", "nn", "1", "0"]);
+    assert_fails(&o, &["000000.png"], "non-image frame");
+    let _ = fs::remove_dir_all(&root);
+}
+
+#[test]
+fn truncated_frame_is_reported() {
+    let good = fixture_frame(0);
+    let root = dataset_with("truncated", &fixture_frame(0), &good[..good.len() / 2]);
+    let o = siftlab(&["-d", root.to_str().unwrap(), "get_info", "-a", "nn", "1", "0"]);
+    assert_fails(&o, &["000001.png"], "truncated frame");
+    let _ = fs::remove_dir_all(&root);
+}
+
+#[test]
+fn non_image_file_for_sift_is_reported() {
+    let dir = scratch("sift-nonimage");
+    let p = dir.join("notes.png");
+    fs::write(&p, b"hello").unwrap();
+    let o = siftlab(&["sift", p.to_str().unwrap()]);
+    assert_fails(&o, &["image"], "sift on a non-image");
+    let o = siftlab(&["sift", dir.join("absent.png").to_str().unwrap()]);
+    assert_fails(&o, &["absent.png"], "sift on a missing file");
+    let _ = fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn tiny_images_give_zero_keypoints_not_a_crash() {
+    let dir = scratch("tiny");
+    for (w, h) in [(1, 1), (2, 3), (8, 8)] {
+        let p = dir.join(format!("tiny{w}x{h}.png"));
+        fs::write(&p, png(w, h, |x, y| ((x * 37 + y * 91) % 256) as u8)).unwrap();
+        let o = siftlab(&["sift", p.to_str().unwrap()]);
+        assert!(o.status.success(), "sift {w}x{h}: {}", stderr(&o));
+        assert!(!stderr(&o).contains("panicked"));
+        assert!(stdout(&o).starts_with("0 keypoints in "), "sift {w}x{h}: {}", stdout(&o));
+        let o = siftlab(&["sift", p.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "sift --json {w}x{h}: {}", stderr(&o));
+        let doc = json_mini::parse(stdout(&o).trim()).expect("valid JSON");
+        assert_eq!(doc.get("keypoints").and_then(|v| v.arr()).map(|a| a.len()), Some(0));
+    }
+    // get_info on tiny frames: SIFT finds nothing, so feature 0 does not exist.
+    let tiny = png(8, 8, |x, y| ((x * 37 + y * 91) % 256) as u8);
+    let root = dataset_with("tiny-ds", &tiny, &tiny);
+    let o = siftlab(&["-d", root.to_str().unwrap(), "get_info", "-a", "nn", "1", "0"]);
+    assert_fails(&o, &["feature"], "get_info on tiny frames");
+    let _ = fs::remove_dir_all(&root);
+    let _ = fs::remove_dir_all(&dir);
+}
