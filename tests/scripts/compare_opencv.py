@@ -14,7 +14,9 @@ Then >= 200 seeded random get_info draws: `siftlab -d DATASET get_info ...` stdo
 lab_reference.py (default wheel) stdout.
 
 Targets (exit 1 if missed): index-exact >= 99.9% vs the default wheel, descriptors within +-1 of
-it, 100% bit-exact vs OPENCV_IPP=disabled, get_info identical on every draw.
+it, 100% bit-exact vs OPENCV_IPP=disabled, get_info identical on every draw (to the default
+wheel's stdout, or — only where that wheel's closed IPP exp/magnitude moved a descriptor by 1 — to
+the IPP-disabled build's stdout; both are computed, in separate processes).
 
 Usage: python3 tests/scripts/compare_opencv.py [--dataset DIR] [--siftlab target/release/siftlab]
                                                 [--draws 250] [--seed 1] [--frames N] [--json FILE]
@@ -148,15 +150,31 @@ def compare(a, b):
     }
 
 
-def run_getinfo(args, ds, frames, counts):
-    import lab_reference as lab
+LAB_WORKER = r"""
+import json, os, sys
+sys.path.insert(0, sys.argv[1])
+import cv2, lab_reference as lab
+if os.environ.get("OPENCV_IPP") == "disabled":
+    cv2.setNumThreads(1)
+    assert not cv2.ipp.useIPP()
+ds = sys.argv[2]
+draws = json.load(sys.stdin)
+cache = lab.FeatureCache()
+out = []
+for f, feat, algo, t in draws:
+    ret = lab.get_info(ds, f, feat, algo, t, cache)
+    out.append([lab.format_stdout(ds, f, feat, algo, t, ret), bool(ret[1])])
+json.dump(out, sys.stdout)
+"""
 
-    rng = random.Random(args.seed)
-    cache = lab.FeatureCache()
+
+def make_draws(seed, n, frames, counts):
+    """Seeded (frame, feature, algo, threshold): thresholds dt/nn in [0, 500] (nn: 20% None),
+    nndr in [0, 1], rounded to 2 decimals."""
+    rng = random.Random(seed)
     pairs = [f for f in frames if f >= 1 and (f - 1) in counts]
-    res = {"draws": 0, "equal": 0, "mismatches": [], "nonempty": 0, "by_algo": {}}
-    t_lab = 0.0
-    for _ in range(args.draws):
+    out = []
+    for _ in range(n):
         f = rng.choice(pairs)
         feat = rng.randrange(max(counts[f - 1], 1))
         algo = rng.choice(("dt", "nn", "nndr"))
@@ -166,8 +184,29 @@ def run_getinfo(args, ds, frames, counts):
             t = round(rng.uniform(0.0, 500.0), 2)
             if algo == "nn" and rng.random() < 0.2:
                 t = None
-        want_ret = lab.get_info(ds, f, feat, algo, t, cache)
-        want = lab.format_stdout(ds, f, feat, algo, t, want_ret)
+        out.append((f, feat, algo, t))
+    return out
+
+
+def lab_stdouts(ds, draws, ipp):
+    """lab_reference.py stdout for every draw, in a subprocess with IPP on (default) or off."""
+    env = dict(os.environ)
+    env.pop("OPENCV_IPP", None)
+    if not ipp:
+        env["OPENCV_IPP"] = "disabled"
+    p = subprocess.run([sys.executable, "-c", LAB_WORKER, HERE, ds], input=json.dumps(draws), env=env,
+                       capture_output=True, text=True, check=True)
+    return json.loads(p.stdout)
+
+
+def run_getinfo(args, ds, frames, counts):
+    draws = make_draws(args.seed, args.draws, frames, counts)
+    want_ipp = lab_stdouts(ds, draws, ipp=True)
+    want_noipp = lab_stdouts(ds, draws, ipp=False)
+    res = {"draws": 0, "equal": 0, "equal_noipp": 0, "ipp_explained": 0, "mismatches": [], "nonempty": 0,
+           "by_algo": {}}
+    t_lab = 0.0
+    for (f, feat, algo, t), (want, nonempty), (want_n, _) in zip(draws, want_ipp, want_noipp):
         cmd = [args.siftlab, "-d", ds, "get_info", "-a", algo]
         if t is not None:
             cmd += ["-t", repr(t)]
@@ -176,15 +215,23 @@ def run_getinfo(args, ds, frames, counts):
         p = subprocess.run(cmd, capture_output=True, text=True)
         t_lab += time.time() - t0
         res["draws"] += 1
-        res["nonempty"] += bool(want_ret[1])
-        ba = res["by_algo"].setdefault(algo, [0, 0])
-        ba[1] += 1
-        if p.returncode == 0 and p.stdout == want:
+        res["nonempty"] += nonempty
+        ba = res["by_algo"].setdefault(algo, [0, 0, 0])
+        ba[2] += 1
+        got_ok = p.returncode == 0
+        if got_ok and p.stdout == want_n:
+            res["equal_noipp"] += 1
+            ba[1] += 1
+        if got_ok and p.stdout == want:
             res["equal"] += 1
             ba[0] += 1
-        elif len(res["mismatches"]) < 10:
-            res["mismatches"].append({"cmd": " ".join(cmd), "want": want, "got": p.stdout, "stderr": p.stderr[-500:],
-                                      "rc": p.returncode})
+        else:
+            if got_ok and p.stdout == want_n and want_n != want:
+                # the default wheel's own IPP exp/magnitude moved a descriptor by 1 (spec §14)
+                res["ipp_explained"] += 1
+            if len(res["mismatches"]) < 10:
+                res["mismatches"].append({"cmd": " ".join(cmd), "want": want, "want_noipp": want_n, "got": p.stdout,
+                                          "stderr": p.stderr[-500:], "rc": p.returncode})
     res["siftlab_s_per_call"] = t_lab / max(res["draws"], 1)
     return res
 
@@ -265,15 +312,18 @@ def main(argv=None) -> int:
               (i, c["n_lab"], c["n_cv"], c["index_exact"], cn["full_exact"], cn["n_cv"]), file=sys.stderr)
 
     counts = {i: len(cv_ipp[i][0]) for i in frames}
-    gi = run_getinfo(args, ds, frames, counts) if args.draws > 0 else {"draws": 0, "equal": 0, "mismatches": [],
-                                                                       "nonempty": 0, "by_algo": {}}
+    gi = run_getinfo(args, ds, frames, counts) if args.draws > 0 else {
+        "draws": 0, "equal": 0, "equal_noipp": 0, "ipp_explained": 0, "mismatches": [], "nonempty": 0, "by_algo": {}}
 
     ie = agg["index_exact"] / agg["kp_cv"] if agg["kp_cv"] else 0.0
     nfull = agg["noipp_full"] / agg["noipp_kp"] if agg["noipp_kp"] else 0.0
     ok_ie = ie >= TARGET_INDEX_EXACT
     ok_desc = max_dd <= 1
     ok_noipp = agg["noipp_frames_exact"] == agg["frames"]
-    ok_gi = gi["draws"] >= min(200, args.draws) and gi["equal"] == gi["draws"]
+    # Every draw must equal the lab's stdout with the default wheel, except where that wheel's
+    # closed IPP kernels moved a descriptor (then it must equal the IPP-disabled build's stdout).
+    ok_gi = (gi["draws"] >= min(200, args.draws) and gi["equal_noipp"] == gi["draws"]
+             and gi["equal"] + gi["ipp_explained"] == gi["draws"])
 
     print("## siftlab vs OpenCV 4.8.0.76 — %s (%d frames)\n" % (ds, agg["frames"]))
     print("| measure | value | target | ok |")
@@ -288,18 +338,23 @@ def main(argv=None) -> int:
     print("| vs OPENCV_IPP=disabled: keypoints bit-exact incl. descriptor | %s (%d/%d) | 100%% | %s |" %
           (pct(agg["noipp_full"], agg["noipp_kp"]), agg["noipp_full"], agg["noipp_kp"], "yes" if ok_noipp else "no"))
     print("| vs OPENCV_IPP=disabled: frames identical | %d/%d | all | |" % (agg["noipp_frames_exact"], agg["frames"]))
-    print("| get_info stdout identical | %d/%d (%d with matches) | all, ≥ 200 | %s |" %
+    print("| get_info stdout identical to lab_reference, default wheel | %d/%d (%d with matches) | all, ≥ 200 | %s |" %
           (gi["equal"], gi["draws"], gi["nonempty"], "yes" if ok_gi else "no"))
-    for a, (e, n) in sorted(gi["by_algo"].items()):
-        print("| get_info %s | %d/%d | | |" % (a, e, n))
+    print("| get_info differing only through the default wheel's IPP descriptor (±1) | %d | | |" % gi["ipp_explained"])
+    print("| get_info stdout identical to lab_reference, OPENCV_IPP=disabled | %d/%d | all | |" %
+          (gi["equal_noipp"], gi["draws"]))
+    for a, (e, en, n) in sorted(gi["by_algo"].items()):
+        print("| get_info %s (default / noipp) | %d/%d, %d/%d | | |" % (a, e, n, en, n))
     print("| siftlab sift --json wall time per frame (incl. process start, decode, JSON) | %.0f ms | | |" %
           (1000 * float(np.median(t_sift))))
     if worst:
         print("\nFrames with differences (first differing index): " +
               ", ".join("%06d@%d" % (i, c["first_diff"]) for i, c in worst[:20]))
     for m in gi["mismatches"][:5]:
-        print("\nget_info mismatch: `%s` (rc %d)\nwant:\n```\n%s```\ngot:\n```\n%s```\n%s" %
-              (m["cmd"], m["rc"], m["want"], m["got"], m["stderr"]))
+        print("\nget_info mismatch: `%s` (rc %d)\nwant (default wheel):\n```\n%s```\n%sgot:\n```\n%s```\n%s" %
+              (m["cmd"], m["rc"], m["want"],
+               "" if m["want_noipp"] == m["want"] else "want (OPENCV_IPP=disabled):\n```\n%s```\n" % m["want_noipp"],
+               m["got"], m["stderr"]))
     if args.json:
         with open(args.json, "w") as f:
             json.dump({"agg": agg, "max_desc_diff": max_dd, "index_exact_share": ie, "noipp_full_share": nfull,
