@@ -72,15 +72,25 @@ fn row_pass(src: &Plane, kx: &[f32]) -> Plane {
     let ks = kx.len();
     let r = ks / 2;
     let mut out = Plane::new(w, h);
-    let mut padded = vec![0f32; w + 2 * r];
-    for y in 0..h {
-        let row = src.row(y);
-        for (i, p) in padded.iter_mut().enumerate() {
-            *p = row[reflect101(i as isize - r as isize, w)];
+    super::par::for_each_chunk(&mut out.data, w, |y0, chunk| {
+        let mut padded = vec![0f32; w + 2 * r];
+        for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
+            let y = y0 + dy;
+            let row = src.row(y);
+            if w > r {
+                padded[r..r + w].copy_from_slice(row);
+                for i in 0..r {
+                    padded[i] = row[reflect101(i as isize - r as isize, w)];
+                    padded[r + w + i] = row[reflect101((w + i) as isize, w)];
+                }
+            } else {
+                for (i, p) in padded.iter_mut().enumerate() {
+                    *p = row[reflect101(i as isize - r as isize, w)];
+                }
+            }
+            accumulate_row(&padded, kx, dst);
         }
-        let dst = out.row_mut(y);
-        accumulate_row(&padded, kx, dst);
-    }
+    });
     out
 }
 
@@ -90,19 +100,21 @@ fn column_pass(src: &Plane, ky: &[f32]) -> Plane {
     let (w, h) = (src.width, src.height);
     let c = ky.len() / 2;
     let mut out = Plane::new(w, h);
-    for y in 0..h {
-        let dst = out.row_mut(y);
-        let centre = src.row(y);
-        let pairs: Vec<(&[f32], &[f32])> = (1..=c)
-            .map(|k| {
-                (
-                    src.row(reflect101(y as isize + k as isize, h)),
-                    src.row(reflect101(y as isize - k as isize, h)),
-                )
-            })
-            .collect();
-        accumulate_column(centre, &pairs, &ky[c..], dst);
-    }
+    super::par::for_each_chunk(&mut out.data, w, |y0, chunk| {
+        for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
+            let y = y0 + dy;
+            let centre = src.row(y);
+            let pairs: Vec<(&[f32], &[f32])> = (1..=c)
+                .map(|k| {
+                    (
+                        src.row(reflect101(y as isize + k as isize, h)),
+                        src.row(reflect101(y as isize - k as isize, h)),
+                    )
+                })
+                .collect();
+            accumulate_column(centre, &pairs, &ky[c..], dst);
+        }
+    });
     out
 }
 
@@ -127,7 +139,12 @@ fn accumulate_row_generic(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
 }
 
 #[inline(always)]
-fn accumulate_column_generic(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
+fn accumulate_column_generic(
+    centre: &[f32],
+    pairs: &[(&[f32], &[f32])],
+    ky: &[f32],
+    dst: &mut [f32],
+) {
     let kc = ky[0];
     for (d, &s) in dst.iter_mut().zip(centre) {
         *d = s * kc;
@@ -148,7 +165,12 @@ unsafe fn accumulate_row_fma(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn accumulate_column_fma(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
+unsafe fn accumulate_column_fma(
+    centre: &[f32],
+    pairs: &[(&[f32], &[f32])],
+    ky: &[f32],
+    dst: &mut [f32],
+) {
     accumulate_column_generic(centre, pairs, ky, dst)
 }
 

@@ -32,9 +32,11 @@ pub fn descriptor(gauss: &[Plane], kp: &KeyPoint, p: &SiftParams) -> [u8; 128] {
     if (ori - 360.0).abs() < FLT_EPSILON {
         ori = 0.0;
     }
-    calc_descriptor(img, ptx, pty, ori, scl, p.opencv_lanes)
+    let lanes = p.opencv_lanes;
+    crate::with_hw_fma!([u8; 128], calc_descriptor(img, ptx, pty, ori, scl, lanes))
 }
 
+#[inline(always)]
 fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: usize) -> [u8; 128] {
     let (px, py) = (rne(ptx) as i64, rne(pty) as i64);
     let angle_rad = ori * f32::from_bits(0x3C8EFA35); // (float)(CV_PI/180)
@@ -76,11 +78,21 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
 
     let len = dxs.len();
     let simd_len = len - len % lanes;
+    // Batch the math kernels over all samples like OpenCV (fastAtan2,
+    // magnitude, exp32f on arrays) so the loops vectorise.
+    let (mut oris, mut mags, mut wts) = (vec![0f32; len], vec![0f32; len], vec![0f32; len]);
+    for k in 0..len {
+        oris[k] = fast_atan2_deg(dys[k], dxs[k]);
+    }
+    for k in 0..len {
+        mags[k] = magnitude(dxs[k], dys[k]);
+    }
+    for k in 0..len {
+        wts[k] = exp32f(ws[k]);
+    }
     let mut hist = [0f32; (D + 2) * (D + 2) * (N + 2)];
     for k in 0..len {
-        let ori_k = fast_atan2_deg(dys[k], dxs[k]);
-        let mag_k = magnitude(dxs[k], dys[k]);
-        let wt = exp32f(ws[k]);
+        let (ori_k, mag_k, wt) = (oris[k], mags[k], wts[k]);
         let (mut rbin, mut cbin) = (rbins[k], cbins[k]);
         let mut obin = (ori_k - ori) * bins_per_deg;
         let mag = mag_k * wt;
@@ -142,6 +154,7 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
 
 /// Clip at 0.2 of the norm, renormalise to 512 and round: OpenCV's
 /// accumulator layout for the first norm depends on its SIMD width.
+#[inline(always)]
 fn normalize(raw: &mut [f32; 128], lanes: usize) -> [u8; 128] {
     let nrm2 = if lanes == 16 {
         let mut acc = [0f32; 16];

@@ -20,6 +20,7 @@ pub mod initial;
 pub mod num;
 pub mod order;
 pub mod orientation;
+pub mod par;
 pub mod pyramid;
 
 use crate::image::GrayImage;
@@ -193,6 +194,11 @@ pub fn detect_and_compute(img: &GrayImage, p: &SiftParams) -> Features {
     }
     let ss = scale_space(img, p);
     let keypoints = find_keypoints(&ss, p);
-    let descriptors = keypoints.iter().map(|kp| descriptor::descriptor(&ss.gauss, kp, p)).collect();
+    let mut descriptors = vec![[0u8; 128]; keypoints.len()];
+    par::for_each_chunk(&mut descriptors, 1, |first, rows| {
+        for (i, row) in rows.iter_mut().enumerate() {
+            *row = descriptor::descriptor(&ss.gauss, &keypoints[first + i], p);
+        }
+    });
     Features { keypoints, descriptors }
 }

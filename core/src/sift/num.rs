@@ -67,6 +67,34 @@ pub fn floor(x: f32) -> i32 {
 
 pub const FLT_EPSILON: f32 = f32::EPSILON;
 
+/// Runs `$body` (an expression whose callees are all `#[inline(always)]`)
+/// compiled with AVX2+FMA when the CPU has them, so every [`fma`] inside is
+/// one instruction instead of a call to the C library's `fmaf`; target
+/// features do not reach functions that are not inlined, hence the macro.
+#[macro_export]
+#[doc(hidden)]
+macro_rules! with_hw_fma {
+    ($ret:ty, $body:expr) => {{
+        #[cfg(target_arch = "x86_64")]
+        {
+            #[target_feature(enable = "avx2,fma")]
+            unsafe fn fast<F: FnOnce() -> $ret>(f: F) -> $ret {
+                f()
+            }
+            if std::is_x86_feature_detected!("fma") && std::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU supports the features `fast` is compiled for.
+                unsafe { fast(|| $body) }
+            } else {
+                $body
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            $body
+        }
+    }};
+}
+
 // fastAtan2 coefficients: the f32 product of each coefficient and (f32)(180/pi).
 const ATAN_P1: f32 = f32::from_bits(0x4265226F);
 const ATAN_P3: f32 = f32::from_bits(0xC19556EE);

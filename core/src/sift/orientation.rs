@@ -17,7 +17,8 @@ pub fn push_oriented(gauss: &[Plane], refined: Refined, p: &SiftParams, out: &mu
     let Refined { kp, o, layer, r, c } = refined;
     let scl = kp.size * 0.5 / (1u32 << o) as f32;
     let img = &gauss[o * (p.n_octave_layers + 3) + layer];
-    let hist = orientation_hist(img, r, c, rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
+    let (radius, sigma, lanes) = (rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
+    let hist = crate::with_hw_fma!([f32; 36], orientation_hist(img, r, c, radius, sigma, lanes));
     let omax = hist.iter().copied().fold(hist[0], f32::max);
     let mag_thr = omax * ORI_PEAK_RATIO;
     let n = ORI_HIST_BINS;
@@ -44,6 +45,7 @@ pub fn push_oriented(gauss: &[Plane], refined: Refined, p: &SiftParams, out: &mu
 /// The smoothed 36-bin histogram. `lanes` is the SIMD width OpenCV's
 /// dispatched kernel used: the first `len − len % lanes` samples add a
 /// rounded product, the scalar tail is FMA-contracted.
+#[inline(always)]
 fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize) -> [f32; 36] {
     let expf_scale = -1.0 / ((2.0 * sigma) * sigma);
     let (rows, cols) = (img.height as i64, img.width as i64);
@@ -72,10 +74,18 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
     let simd_len = len - len % lanes;
     let mut t = [0f32; 36 + 4];
     // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
+    let (mut oris, mut mags, mut wts) = (vec![0f32; len], vec![0f32; len], vec![0f32; len]);
     for k in 0..len {
-        let wt = exp32f(ws[k]);
-        let ori = fast_atan2_deg(dys[k], dxs[k]);
-        let mag = magnitude(dxs[k], dys[k]);
+        oris[k] = fast_atan2_deg(dys[k], dxs[k]);
+    }
+    for k in 0..len {
+        mags[k] = magnitude(dxs[k], dys[k]);
+    }
+    for k in 0..len {
+        wts[k] = exp32f(ws[k]);
+    }
+    for k in 0..len {
+        let (wt, ori, mag) = (wts[k], oris[k], mags[k]);
         let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
         if bin >= 36 {
             bin -= 36;

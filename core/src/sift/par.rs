@@ -1,0 +1,39 @@
+//! Data parallelism without a thread-pool dependency: scoped std threads
+//! natively, plain loops on wasm32 (no threads there). Every parallel
+//! stage writes results that do not depend on the split, as in OpenCV.
+
+/// Number of worker threads to use for one stage.
+pub fn threads() -> usize {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1).min(8)
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        1
+    }
+}
+
+/// Fills `out` (split into contiguous chunks of `chunk_len` multiples of
+/// `unit` elements) by calling `f(first_unit_index, chunk)` on each chunk.
+pub fn for_each_chunk<T: Send>(out: &mut [T], unit: usize, f: impl Fn(usize, &mut [T]) + Sync) {
+    let units = if unit == 0 { 0 } else { out.len() / unit };
+    let n = threads().min(units.max(1));
+    // Thread start-up costs more than small planes (the top octaves) take.
+    if n <= 1 || units < 2 || std::mem::size_of_val(out) < 256 * 1024 {
+        f(0, out);
+        return;
+    }
+    let per = units.div_ceil(n);
+    #[cfg(not(target_arch = "wasm32"))]
+    std::thread::scope(|s| {
+        for (i, chunk) in out.chunks_mut(per * unit).enumerate() {
+            let f = &f;
+            s.spawn(move || f(i * per, chunk));
+        }
+    });
+    #[cfg(target_arch = "wasm32")]
+    for (i, chunk) in out.chunks_mut(per * unit).enumerate() {
+        f(i * per, chunk);
+    }
+}
