@@ -1,1 +1,264 @@
-//! TODO
+//! The lab's dataset layout (KITTI odometry, sequence 00, as MyKITTI ships it):
+//!
+//! ```text
+//! DATASET/gray/00/image_0/000000.png, 000001.png, ...   8-bit gray frames
+//! DATASET/poses/00.txt                                  one 3×4 [R|t] per line
+//! ```
+//!
+//! Parsing works from text/bytes (the web app reads a picked folder); the
+//! file-system part is native only.
+
+use crate::{Error, Result};
+
+/// Folder of the frames, relative to the dataset root.
+pub const FRAME_DIR: &str = "gray/00/image_0";
+/// Ground-truth poses, relative to the dataset root.
+pub const POSES_FILE: &str = "poses/00.txt";
+
+/// A KITTI pose line: the 3×4 matrix [R|t], row-major.
+pub type PoseRow = [f64; 12];
+
+/// File name of frame `i`: `%06d.png`.
+pub fn frame_name(i: usize) -> String {
+    format!("{i:06}.png")
+}
+
+/// Path of frame `i` relative to the dataset root (`gray/00/image_0/%06d.png`).
+pub fn frame_relative_path(i: usize) -> String {
+    format!("{FRAME_DIR}/{}", frame_name(i))
+}
+
+/// The camera position of a pose (elements 3, 7, 11).
+pub fn position(p: &PoseRow) -> [f64; 3] {
+    [p[3], p[7], p[11]]
+}
+
+/// Parses KITTI pose text: 12 numbers per non-empty line, separated by
+/// whitespace. Errors name the line (1-based) and what is wrong with it.
+pub fn parse_poses(text: &str) -> Result<Vec<PoseRow>> {
+    let mut poses = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let line = line.trim();
+        if line.is_empty() {
+            continue;
+        }
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        if fields.len() != 12 {
+            return Err(Error::Dataset(format!(
+                "{POSES_FILE} line {}: expected 12 numbers (a 3x4 [R|t] matrix), found {}",
+                n + 1,
+                fields.len()
+            )));
+        }
+        let mut row = [0.0; 12];
+        for (k, f) in fields.iter().enumerate() {
+            // Rust's parse is correctly rounded, like Python's float().
+            let v: f64 = f.parse().map_err(|_| {
+                Error::Dataset(format!(
+                    "{POSES_FILE} line {}: field {} ({f:?}) is not a number",
+                    n + 1,
+                    k + 1
+                ))
+            })?;
+            if !v.is_finite() {
+                return Err(Error::Dataset(format!(
+                    "{POSES_FILE} line {}: field {} ({f:?}) is not finite",
+                    n + 1,
+                    k + 1
+                )));
+            }
+            row[k] = v;
+        }
+        poses.push(row);
+    }
+    if poses.is_empty() {
+        return Err(Error::Dataset(format!("{POSES_FILE} is empty: it needs one pose line per frame")));
+    }
+    Ok(poses)
+}
+
+/// The lab's scale for frame `i`: the Euclidean distance between the ground
+/// truth positions of frames i−1 and i, accurately rounded as `math.dist`.
+pub fn gt_scale(poses: &[PoseRow], i: usize) -> Result<f64> {
+    if i == 0 || i >= poses.len() {
+        return Err(Error::Dataset(format!(
+            "no ground-truth scale for frame {i}: {POSES_FILE} has {} poses (the scale of \
+             frame i needs poses i-1 and i)",
+            poses.len()
+        )));
+    }
+    Ok(crate::vo::metrics::dist3(&position(&poses[i - 1]), &position(&poses[i])))
+}
+
+/// A dataset folder with the lab's layout.
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    root: std::path::PathBuf,
+    frame_count: usize,
+    poses: Vec<PoseRow>,
+}
+
+impl Dataset {
+    /// Opens `root`, checks the layout, parses the poses and counts the
+    /// consecutive frames from 000000.png.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn open(root: &std::path::Path) -> Result<Dataset> {
+        let layout = "expected the MyKITTI layout: gray/00/image_0/000000.png ... and poses/00.txt";
+        if !root.is_dir() {
+            return Err(Error::Dataset(format!(
+                "dataset folder {} does not exist ({layout}); pass it with -d DATASET",
+                root.display()
+            )));
+        }
+        let frames = root.join(FRAME_DIR);
+        if !frames.is_dir() {
+            return Err(Error::Dataset(format!(
+                "{} has no {FRAME_DIR} folder ({layout})",
+                root.display()
+            )));
+        }
+        let poses_path = root.join(POSES_FILE);
+        let text = std::fs::read(&poses_path).map_err(|e| {
+            Error::Dataset(format!(
+                "cannot read the ground-truth poses {}: {e} ({layout})",
+                poses_path.display()
+            ))
+        })?;
+        let text = String::from_utf8(text).map_err(|_| {
+            Error::Dataset(format!("{} is not a text file of numbers", poses_path.display()))
+        })?;
+        let poses = parse_poses(&text)
+            .map_err(|e| Error::Dataset(format!("{}: {e}", root.display())))?;
+        let mut frame_count = 0;
+        while frames.join(frame_name(frame_count)).is_file() {
+            frame_count += 1;
+        }
+        if frame_count == 0 {
+            return Err(Error::Dataset(format!(
+                "{} has no frame {} ({layout})",
+                root.display(),
+                frame_relative_path(0)
+            )));
+        }
+        Ok(Dataset { root: root.to_path_buf(), frame_count, poses })
+    }
+
+    /// A dataset whose frames come from elsewhere (the web app's folder
+    /// picker): only the poses and the frame count are known here.
+    pub fn from_parts(root: std::path::PathBuf, frame_count: usize, poses: Vec<PoseRow>) -> Dataset {
+        Dataset { root, frame_count, poses }
+    }
+
+    pub fn root(&self) -> &std::path::Path {
+        &self.root
+    }
+
+    /// Number of consecutive frames 000000.png, 000001.png, ... present.
+    pub fn frame_count(&self) -> usize {
+        self.frame_count
+    }
+
+    pub fn poses(&self) -> &[PoseRow] {
+        &self.poses
+    }
+
+    pub fn frame_path(&self, i: usize) -> std::path::PathBuf {
+        self.root.join(FRAME_DIR).join(frame_name(i))
+    }
+
+    /// Checks that frames 0..n and their poses exist.
+    pub fn check_frames(&self, n: usize) -> Result<()> {
+        if n > self.frame_count {
+            return Err(Error::Dataset(format!(
+                "asked for {n} frames but {} has only {} ({} is missing)",
+                self.root.display(),
+                self.frame_count,
+                frame_relative_path(self.frame_count)
+            )));
+        }
+        if n > self.poses.len() {
+            return Err(Error::Dataset(format!(
+                "asked for {n} frames but {POSES_FILE} has only {} pose lines",
+                self.poses.len()
+            )));
+        }
+        Ok(())
+    }
+
+    /// Frame `i` as `cv2.imread(path, 0)` reads it.
+    #[cfg(not(target_arch = "wasm32"))]
+    pub fn load_frame(&self, i: usize) -> Result<crate::GrayImage> {
+        let path = self.frame_path(i);
+        let bytes = std::fs::read(&path).map_err(|e| {
+            Error::Dataset(format!("cannot read frame {i} ({}): {e}", path.display()))
+        })?;
+        crate::GrayImage::decode(&bytes).map_err(|e| Error::Decode(format!("frame {i} ({}): {e}", path.display())))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const TWO: &str = "1 0 0 0 0 1 0 0 0 0 1 0\n\
+        9.999978e-01 5.272628e-04 -2.066935e-03 -4.690294e-02 -5.296506e-04 9.999992e-01 -1.154865e-03 -2.839928e-02 2.066324e-03 1.155958e-03 9.999971e-01 8.586941e-01\n";
+
+    #[test]
+    fn parses_kitti_lines() {
+        let p = parse_poses(TWO).unwrap();
+        assert_eq!(p.len(), 2);
+        assert_eq!(position(&p[1]), [-4.690294e-02, -2.839928e-02, 8.586941e-01]);
+        // math.dist((0,0,0), (-4.690294e-02, -2.839928e-02, 8.586941e-01))
+        assert_eq!(gt_scale(&p, 1).unwrap(), 0.8604428872737412);
+        assert!(gt_scale(&p, 2).is_err());
+    }
+
+    #[test]
+    fn malformed_lines_are_named() {
+        let e = parse_poses("1 0 0 0 0 1 0 0 0 0 1 0\n1 2 3\n").unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "poses/00.txt line 2: expected 12 numbers (a 3x4 [R|t] matrix), found 3"
+        );
+        let e = parse_poses("\n1 0 0 0 0 1 0 x 0 0 1 0\n").unwrap_err();
+        assert_eq!(e.to_string(), "poses/00.txt line 2: field 8 (\"x\") is not a number");
+        let e = parse_poses("1 0 0 0 0 1 0 0 0 0 1 nan\n").unwrap_err();
+        assert!(e.to_string().contains("line 1: field 12"), "{e}");
+        assert!(parse_poses("\n \n").unwrap_err().to_string().contains("empty"));
+    }
+
+    #[cfg(not(target_arch = "wasm32"))]
+    #[test]
+    fn open_checks_the_layout() {
+        let dir = std::env::temp_dir().join(format!("siftlab-ds-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        let e = Dataset::open(&dir).unwrap_err().to_string();
+        assert!(e.contains("has no gray/00/image_0 folder"), "{e}");
+        std::fs::create_dir_all(dir.join(FRAME_DIR)).unwrap();
+        let e = Dataset::open(&dir).unwrap_err().to_string();
+        assert!(e.contains("cannot read the ground-truth poses"), "{e}");
+        std::fs::create_dir_all(dir.join("poses")).unwrap();
+        std::fs::write(dir.join(POSES_FILE), TWO).unwrap();
+        let e = Dataset::open(&dir).unwrap_err().to_string();
+        assert!(e.contains("has no frame gray/00/image_0/000000.png"), "{e}");
+        let png = {
+            let img = image::GrayImage::from_fn(8, 6, |x, y| image::Luma([(x * 20 + y) as u8]));
+            let mut buf = Vec::new();
+            image::DynamicImage::ImageLuma8(img)
+                .write_to(&mut std::io::Cursor::new(&mut buf), image::ImageFormat::Png)
+                .unwrap();
+            buf
+        };
+        std::fs::write(dir.join(FRAME_DIR).join("000000.png"), &png).unwrap();
+        std::fs::write(dir.join(FRAME_DIR).join("000001.png"), b"not a png").unwrap();
+        let ds = Dataset::open(&dir).unwrap();
+        assert_eq!(ds.frame_count(), 2);
+        assert_eq!(ds.load_frame(0).unwrap().get(2, 1), 41);
+        let e = ds.load_frame(1).unwrap_err().to_string();
+        assert!(e.starts_with("frame 1 ("), "{e}");
+        let e = ds.check_frames(3).unwrap_err().to_string();
+        assert!(e.contains("has only 2 (gray/00/image_0/000002.png is missing)"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -47,5 +47,90 @@ def lk_pair():
                                                  int(s), f32bits(e) if s else "0x00000000"))
 
 
+# ---- five-point (findEssentialMat on exactly 5 normalized points) ----
+M=(1<<64)-1
+def rodrigues(w):
+    R,_=cv2.Rodrigues(np.array(w,np.float64)); return R
+def scene(R,t,n,seed):
+    s=seed
+    def rnd():
+        nonlocal s
+        s=(s*6364136223846793005+1442695040888963407)&M
+        return (s>>11)/float(1<<53)
+    a=[];b=[]
+    for _ in range(n):
+        x1=np.array([rnd()*8-4, rnd()*4-2, 5+rnd()*20])
+        x2=R@x1+np.array(t)
+        a.append([x1[0]/x1[2],x1[1]/x1[2]]); b.append([x2[0]/x2[2],x2[1]/x2[2]])
+    return np.array(a),np.array(b)
+def skew(v): return np.array([[0,-v[2],v[1]],[v[2],0,-v[0]],[-v[1],v[0],0]])
+cases=[([0.02,-0.05,0.01],[0.1,0.05,-1.0],11),([-0.1,0.2,0.05],[1.0,-0.2,0.3],12),([0.3,0.1,-0.2],[-0.4,0.8,0.5],13),([0.001,0.004,-0.002],[0.01,-0.02,1.0],14)]
+
+
+def five_point():
+    print("// five-point goldens")
+    for w, t, seed in cases:
+        R = rodrigues(w)
+        a, b = scene(R, t, 5, seed)
+        E, mask = cv2.findEssentialMat(a, b, focal=1.0, pp=(0., 0.), method=cv2.RANSAC, prob=0.999, threshold=1.0)
+        k = E.shape[0] // 3
+        print("FivePointCase { rvec: %r, t: %r," % (w, t))
+        print("  p1: [%s]," % ", ".join("[%r, %r]" % (float(x), float(y)) for x, y in a))
+        print("  p2: [%s]," % ", ".join("[%r, %r]" % (float(x), float(y)) for x, y in b))
+        print("  opencv: &[%s] }," % ", ".join(
+            "[%s]" % ", ".join(repr(float(v)) for v in E[3 * i:3 * i + 3].ravel()) for i in range(k)))
+
+
+# ---- RANSAC: pixel points of a scene with 60 outliers, KITTI intrinsics ----
+F, CX, CY = 718.856, 607.1928, 185.2157
+
+
+def lcg_scene(R, t, n, seed):
+    """Mirrors ransac.rs tests::pixel_scene operation by operation (plain
+    IEEE double arithmetic, left to right), so both sides get the same f32."""
+    s = seed
+    def rnd():
+        nonlocal s
+        s = (s * 6364136223846793005 + 1442695040888963407) & M
+        return (s >> 11) / float(1 << 53)
+    p1, p2 = [], []
+    for _ in range(n):
+        x1 = [rnd() * 8.0 - 4.0, rnd() * 4.0 - 2.0, 5.0 + rnd() * 20.0]
+        x2 = [R[i][0] * x1[0] + R[i][1] * x1[1] + R[i][2] * x1[2] + t[i] for i in range(3)]
+        p1.append([np.float32(x1[0] / x1[2] * F + CX), np.float32(x1[1] / x1[2] * F + CY)])
+        p2.append([np.float32(x2[0] / x2[2] * F + CX), np.float32(x2[1] / x2[2] * F + CY)])
+    return np.array(p1, np.float32), np.array(p2, np.float32)
+
+
+# cv2.Rodrigues(np.array([0.005, -0.0316, 0.005])), as literals for both sides.
+RANSAC_R = [[0.9994882647177734, -0.005078119343031715, -0.03158197896573382],
+            [0.004920133148589171, 0.9999750021844237, -0.005078119343031715],
+            [0.03160697678131018, 0.004920133148589171, 0.9994882647177734]]
+RANSAC_T = [0.05, -0.02, -1.0]
+
+
+def ransac():
+    p1, p2 = lcg_scene(RANSAC_R, RANSAC_T, 300, 99)
+    for i in range(0, 300, 5):
+        p1[i, 0] = np.float32(p1[i, 0] + np.float32(15 + i % 25))
+        p1[i, 1] = np.float32(p1[i, 1] - np.float32(20))
+    E, mask = cv2.findEssentialMat(p1, p2, focal=F, pp=(CX, CY), method=cv2.RANSAC, prob=0.999, threshold=1.0)
+    print("// RANSAC golden: E, inliers, outlier indices")
+    print("    const OPENCV_E: [f64; 9] = [%s];" % ", ".join(repr(float(v)) for v in E.ravel()))
+    print("    const OPENCV_INLIERS: usize = %d;" % int(mask.sum()))
+    print("    const OPENCV_OUTLIERS: &[usize] = &[%s];" % ", ".join(str(i) for i in np.flatnonzero(mask.ravel() == 0)))
+    n, R, t, pmask = cv2.recoverPose(E, p1, p2, focal=F, pp=(CX, CY))
+    print("// recoverPose golden")
+    print("    const OPENCV_POSE_INLIERS: usize = %d;" % n)
+    print("    const OPENCV_R: [f64; 9] = [%s];" % ", ".join(repr(float(v)) for v in R.ravel()))
+    print("    const OPENCV_T: [f64; 3] = [%s];" % ", ".join(repr(float(v)) for v in t.ravel()))
+
+
 if __name__ == "__main__":
-    lk_pair()
+    what = sys.argv[1:] or ["lk", "five_point", "ransac"]
+    if "lk" in what:
+        lk_pair()
+    if "five_point" in what:
+        five_point()
+    if "ransac" in what:
+        ransac()

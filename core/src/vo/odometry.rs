@@ -1,0 +1,351 @@
+//! The lab's trajectory loop (opencv-vo-4.8.md §5) as a step API: feed frames
+//! in order with their ground-truth pose, get the position after each one.
+//!
+//! ```text
+//! frame 0:  ref = SIFT keypoint positions
+//! frame i:  cur = LK(last, img, ref), keep status 1
+//!           E = findEssentialMat(cur, ref); Ri, ti = recoverPose(E, cur, ref)
+//!           i == 1: R, t = Ri, ti (unscaled)
+//!           else:   scale = |gt_i − gt_{i−1}|; if scale > 0.1: t += scale·R·ti; R = Ri·R
+//!                   if #tracked < 1500: cur = SIFT positions of img
+//!           ref = cur
+//! ```
+
+use super::lk::{calc_optical_flow_pyr_lk, LkParams};
+use super::ransac::{find_essential_mat, RansacParams};
+use super::recover_pose::recover_pose;
+use super::{mat_mul, mat_vec, Camera, Mat3, Vec3, IDENTITY};
+use crate::dataset::{position, PoseRow};
+use crate::sift::{detect, SiftParams};
+use crate::{Error, GrayImage, Result};
+
+/// Returns the points the loop tracks (the lab: SIFT keypoint positions, in
+/// detector order).
+pub type Detector = Box<dyn FnMut(&GrayImage) -> Vec<[f32; 2]> + Send>;
+
+/// The lab's detector: `cv2.SIFT_create(nfeatures=1500).detect(img)` positions.
+pub fn sift_detector() -> Detector {
+    let params = SiftParams::default();
+    Box::new(move |img| detect(img, &params).iter().map(|k| [k.x, k.y]).collect())
+}
+
+/// What one frame did.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StepResult {
+    pub frame: usize,
+    /// The position the lab draws after this frame: t for i ≥ 2, else 0.
+    pub position: Vec3,
+    /// Ground-truth position of this frame, if given.
+    pub gt_position: Option<Vec3>,
+    /// Accumulated rotation after this frame.
+    pub rotation: Mat3,
+    /// Points given to LK / tracked with status 1 (0 for frame 0).
+    pub points_in: usize,
+    pub tracked: usize,
+    /// findEssentialMat inliers and RANSAC iterations, recoverPose inliers.
+    pub essential_inliers: usize,
+    pub ransac_iterations: usize,
+    pub pose_inliers: usize,
+    /// GT scale used (frames ≥ 2) and whether it passed the 0.1 test.
+    pub scale: Option<f64>,
+    pub updated: bool,
+    /// Whether the points were re-detected (frame 0 counts as detected).
+    pub redetected: bool,
+    /// Points carried to the next frame.
+    pub points_out: usize,
+}
+
+/// The lab's loop, one frame per [`Odometry::step`].
+pub struct Odometry {
+    cam: Camera,
+    lk: LkParams,
+    ransac: RansacParams,
+    /// Re-detect when fewer points than this survive tracking (nfeatures).
+    pub min_points: usize,
+    detector: Detector,
+    frame: usize,
+    last: Option<GrayImage>,
+    refs: Vec<[f32; 2]>,
+    r: Mat3,
+    t: Vec3,
+    prev_gt: Option<PoseRow>,
+}
+
+impl Odometry {
+    /// The lab's pipeline with SIFT (nfeatures = 1500).
+    pub fn new(cam: Camera) -> Result<Odometry> {
+        Odometry::with_detector(cam, sift_detector())
+    }
+
+    /// The same loop with another point source (tests, or precomputed points).
+    pub fn with_detector(cam: Camera, detector: Detector) -> Result<Odometry> {
+        cam.validate()?;
+        Ok(Odometry {
+            cam,
+            lk: LkParams::default(),
+            ransac: RansacParams::default(),
+            min_points: 1500,
+            detector,
+            frame: 0,
+            last: None,
+            refs: Vec::new(),
+            r: IDENTITY,
+            t: [0.0; 3],
+            prev_gt: None,
+        })
+    }
+
+    /// Index of the frame the next `step` expects.
+    pub fn next_frame(&self) -> usize {
+        self.frame
+    }
+
+    pub fn camera(&self) -> &Camera {
+        &self.cam
+    }
+
+    /// The current estimate (R, t) of the lab's accumulation.
+    pub fn pose(&self) -> (Mat3, Vec3) {
+        (self.r, self.t)
+    }
+
+    fn check_frame(&self, img: &GrayImage) -> Result<()> {
+        let (w, h) = (img.width(), img.height());
+        if let Some(last) = &self.last {
+            if (last.width(), last.height()) != (w, h) {
+                return Err(Error::Odometry(format!(
+                    "frame {} is {w}x{h} but the previous frames are {}x{}: every frame of a \
+                     sequence must have the same size",
+                    self.frame,
+                    last.width(),
+                    last.height()
+                )));
+            }
+        }
+        if !(self.cam.cx >= 0.0 && self.cam.cx < w as f64 && self.cam.cy >= 0.0 && self.cam.cy < h as f64) {
+            return Err(Error::Odometry(format!(
+                "frame {} is {w}x{h}, too small for the camera (principal point ({}, {})); \
+                 KITTI 00 frames are 1241x376 — use frames of the sequence the intrinsics are for",
+                self.frame, self.cam.cx, self.cam.cy
+            )));
+        }
+        if w < 2 || h < 2 {
+            return Err(Error::Odometry(format!("frame {} is {w}x{h}: too small to track", self.frame)));
+        }
+        Ok(())
+    }
+
+    /// Processes the next frame with its ground-truth pose (needed from frame
+    /// 1 on: the scale of frame i is the GT distance between i−1 and i). On
+    /// error the state is unchanged, so the caller keeps what it had.
+    pub fn step(&mut self, img: &GrayImage, gt: Option<&PoseRow>) -> Result<StepResult> {
+        let i = self.frame;
+        self.check_frame(img)?;
+        let gt_position = gt.map(position);
+        let mut res = StepResult {
+            frame: i,
+            position: [0.0; 3],
+            gt_position,
+            rotation: self.r,
+            points_in: 0,
+            tracked: 0,
+            essential_inliers: 0,
+            ransac_iterations: 0,
+            pose_inliers: 0,
+            scale: None,
+            updated: false,
+            redetected: false,
+            points_out: 0,
+        };
+        let Some(last) = &self.last else {
+            let refs = (self.detector)(img);
+            res.redetected = true;
+            res.points_out = refs.len();
+            self.refs = refs;
+            self.last = Some(img.clone());
+            self.prev_gt = gt.copied();
+            self.frame = 1;
+            return Ok(res);
+        };
+        let scale = if i >= 2 {
+            let (Some(prev), Some(cur)) = (self.prev_gt.as_ref(), gt) else {
+                return Err(Error::Odometry(format!(
+                    "frame {i} needs the ground-truth poses of frames {} and {i} for its scale \
+                     (poses/00.txt is missing lines)",
+                    i - 1
+                )));
+            };
+            Some(super::metrics::dist3(&position(prev), &position(cur)))
+        } else {
+            None
+        };
+
+        let flow = calc_optical_flow_pyr_lk(last, img, &self.refs, &self.lk);
+        let mut refs = Vec::with_capacity(self.refs.len());
+        let mut cur = Vec::with_capacity(self.refs.len());
+        for ((r, c), &ok) in self.refs.iter().zip(&flow.next_pts).zip(&flow.status) {
+            if ok {
+                refs.push(*r);
+                cur.push(*c);
+            }
+        }
+        res.points_in = self.refs.len();
+        res.tracked = cur.len();
+        if cur.len() < 5 {
+            return Err(Error::Odometry(format!(
+                "frame {i}: only {} of {} points could be tracked from frame {}; the motion \
+                 needs at least 5 (are the frames consecutive?)",
+                cur.len(),
+                self.refs.len(),
+                i - 1
+            )));
+        }
+        // points1 = current frame, points2 = previous frame, as the lab calls it.
+        let ess = find_essential_mat(&cur, &refs, &self.cam, &self.ransac)
+            .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+        let e = ess.essential().map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+        let pose = recover_pose(e, &cur, &refs, &self.cam)
+            .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+        res.essential_inliers = ess.inliers;
+        res.ransac_iterations = ess.iterations;
+        res.pose_inliers = pose.inliers;
+
+        let (mut r, mut t) = (self.r, self.t);
+        let mut next_refs = cur;
+        match scale {
+            None => {
+                // Frame 1: the raw unit translation, kept in every later position.
+                r = pose.r;
+                t = pose.t;
+            }
+            Some(s) => {
+                res.scale = Some(s);
+                if s > 0.1 {
+                    let rt = mat_vec(&r, &pose.t);
+                    t = [t[0] + s * rt[0], t[1] + s * rt[1], t[2] + s * rt[2]];
+                    r = mat_mul(&pose.r, &r);
+                    res.updated = true;
+                }
+                if refs.len() < self.min_points {
+                    next_refs = (self.detector)(img);
+                    res.redetected = true;
+                }
+            }
+        }
+        self.r = r;
+        self.t = t;
+        res.rotation = r;
+        res.position = if i >= 2 { t } else { [0.0; 3] };
+        res.points_out = next_refs.len();
+        self.refs = next_refs;
+        self.last = Some(img.clone());
+        self.prev_gt = gt.copied();
+        self.frame += 1;
+        Ok(res)
+    }
+}
+
+/// Runs the loop over frames `0..n`, loading each with `load(i)`; `progress`
+/// gets (done, total) after every frame. Returns the per-frame results.
+pub fn run(
+    odo: &mut Odometry,
+    n: usize,
+    poses: &[PoseRow],
+    mut load: impl FnMut(usize) -> Result<GrayImage>,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<StepResult>> {
+    let mut out = Vec::with_capacity(n);
+    for i in 0..n {
+        let img = load(i)?;
+        out.push(odo.step(&img, poses.get(i))?);
+        progress(i + 1, n);
+    }
+    Ok(out)
+}
+
+/// A KITTI pose line for (R, t): `R00 R01 R02 t0 R10 ... t2`.
+pub fn pose_row(r: &Mat3, t: &Vec3) -> PoseRow {
+    [r[0][0], r[0][1], r[0][2], t[0], r[1][0], r[1][1], r[1][2], t[1], r[2][0], r[2][1], r[2][2], t[2]]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A textured "road" image seen by a camera displaced by `dz` forward:
+    /// a pure zoom about the principal point of a far plane approximates it.
+    fn frame(w: usize, h: usize, zoom: f64, cam: &Camera) -> GrayImage {
+        let mut d = vec![0u8; w * h];
+        for y in 0..h {
+            for x in 0..w {
+                let u = (x as f64 - cam.cx) / zoom;
+                let v = (y as f64 - cam.cy) / zoom;
+                let val = 128.0
+                    + 45.0 * (u * 0.11 + v * 0.05).sin()
+                    + 40.0 * (v * 0.13 - u * 0.07).sin()
+                    + 30.0 * (u * 0.031).cos() * (v * 0.027).sin();
+                d[y * w + x] = val.round().clamp(0.0, 255.0) as u8;
+            }
+        }
+        GrayImage::new(w, h, d).unwrap()
+    }
+
+    fn grid(img: &GrayImage) -> Vec<[f32; 2]> {
+        let mut p = Vec::new();
+        for y in (20..img.height() - 20).step_by(12) {
+            for x in (20..img.width() - 20).step_by(12) {
+                p.push([x as f32 + 0.5, y as f32 + 0.5]);
+            }
+        }
+        p
+    }
+
+    fn gt(z: f64) -> PoseRow {
+        [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, z]
+    }
+
+    #[test]
+    fn loop_follows_the_lab_rules() {
+        let cam = Camera { fx: 300.0, fy: 300.0, cx: 160.0, cy: 120.0 };
+        let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+        odo.min_points = 10_000;
+        let r0 = odo.step(&frame(320, 240, 1.0, &cam), Some(&gt(0.0))).unwrap();
+        assert!(r0.redetected && r0.points_out > 300);
+        assert_eq!(r0.position, [0.0; 3]);
+        let r1 = odo.step(&frame(320, 240, 1.02, &cam), Some(&gt(1.0))).unwrap();
+        // Frame 1: position drawn as 0, never re-detects.
+        assert_eq!(r1.position, [0.0; 3]);
+        assert!(!r1.redetected && r1.scale.is_none());
+        assert!(r1.tracked > 250, "{}", r1.tracked);
+        // Frame 2 with a GT step of 0.05 (≤ 0.1): no update, but re-detection.
+        let before = odo.pose();
+        let r2 = odo.step(&frame(320, 240, 1.04, &cam), Some(&gt(1.05))).unwrap();
+        assert_eq!(r2.scale, Some(0.050000000000000044));
+        assert!(!r2.updated && r2.redetected);
+        assert_eq!(odo.pose(), before);
+        assert_eq!(r2.position, before.1);
+        // Frame 3 with a GT step of 2: t += 2·R·ti.
+        let r3 = odo.step(&frame(320, 240, 1.06, &cam), Some(&gt(3.05))).unwrap();
+        assert!(r3.updated);
+        let moved: f64 = (0..3).map(|k| (r3.position[k] - r2.position[k]).powi(2)).sum::<f64>().sqrt();
+        assert!((moved - 2.0).abs() < 1e-9, "moved {moved}");
+    }
+
+    #[test]
+    fn errors_leave_the_state_unchanged() {
+        let cam = Camera { fx: 300.0, fy: 300.0, cx: 160.0, cy: 120.0 };
+        let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+        odo.step(&frame(320, 240, 1.0, &cam), Some(&gt(0.0))).unwrap();
+        let e = odo.step(&frame(300, 240, 1.0, &cam), Some(&gt(1.0))).unwrap_err();
+        assert!(e.to_string().contains("frame 1 is 300x240 but the previous frames are 320x240"), "{e}");
+        assert_eq!(odo.next_frame(), 1);
+        odo.step(&frame(320, 240, 1.02, &cam), Some(&gt(1.0))).unwrap();
+        let e = odo.step(&frame(320, 240, 1.04, &cam), None).unwrap_err();
+        assert!(e.to_string().contains("frame 2 needs the ground-truth poses"), "{e}");
+        assert_eq!(odo.next_frame(), 2);
+        // KITTI intrinsics on a small frame.
+        let mut kitti = Odometry::with_detector(Camera::default(), Box::new(grid)).unwrap();
+        let e = kitti.step(&frame(320, 240, 1.0, &cam), None).unwrap_err();
+        assert!(e.to_string().contains("too small for the camera"), "{e}");
+    }
+}

@@ -1,0 +1,184 @@
+//! `cv2.recoverPose(E, points1, points2, focal=..., pp=...)` in OpenCV 4.8
+//! (opencv-vo-4.8.md §4): decomposeEssentialMat by the Jacobi SVD, the four
+//! candidates in OpenCV's order, DLT triangulation and the cheirality /
+//! distance (50) votes of every point (the lab passes no mask).
+
+use super::linalg::{null_vector_4x4, svd};
+use super::{det3, mat_mul, Camera, Mat3, Vec3};
+use crate::{Error, Result};
+
+/// recoverPose's default `distanceThresh`.
+pub const DISTANCE_THRESH: f64 = 50.0;
+
+/// recoverPose's answer: `X2 = R·X1 + t` maps points of the points1 camera
+/// into the points2 camera; `t` has unit norm.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pose {
+    pub r: Mat3,
+    pub t: Vec3,
+    /// Points in front of both cameras (closer than 50) for the chosen pose.
+    pub inliers: usize,
+    pub mask: Vec<bool>,
+    /// Votes of the four candidates [R1|t], [R2|t], [R1|−t], [R2|−t].
+    pub votes: [usize; 4],
+}
+
+/// `decomposeEssentialMat`: (R1, R2, t).
+pub fn decompose_essential(e: &Mat3) -> (Mat3, Mat3, Vec3) {
+    let flat: Vec<f64> = e.iter().flatten().copied().collect();
+    let s = svd(&flat, 3, 3, false);
+    let mut u: Mat3 = std::array::from_fn(|r| std::array::from_fn(|c| s.u[r * 3 + c]));
+    let mut vt: Mat3 = std::array::from_fn(|r| std::array::from_fn(|c| s.vt[r * 3 + c]));
+    if det3(&u) < 0.0 {
+        u = u.map(|row| row.map(|v| -v));
+    }
+    if det3(&vt) < 0.0 {
+        vt = vt.map(|row| row.map(|v| -v));
+    }
+    let w: Mat3 = [[0.0, 1.0, 0.0], [-1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+    let wt: Mat3 = [[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
+    let r1 = mat_mul(&mat_mul(&u, &w), &vt);
+    let r2 = mat_mul(&mat_mul(&u, &wt), &vt);
+    (r1, r2, [u[0][2], u[1][2], u[2][2]])
+}
+
+/// Whether the point triangulated with `P0 = [I|0]` and `P = [R|t]` lies in
+/// front of both cameras and closer than `dist` (the tests of §4 step 4).
+#[inline]
+fn votes_for(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> bool {
+    let (x1, y1, x2, y2) = (a[0], a[1], b[0], b[1]);
+    let p: [[f64; 4]; 3] = std::array::from_fn(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
+    let m = [
+        [-1.0, 0.0, x1, 0.0],
+        [0.0, -1.0, y1, 0.0],
+        std::array::from_fn(|k| x2 * p[2][k] - p[0][k]),
+        std::array::from_fn(|k| y2 * p[2][k] - p[1][k]),
+    ];
+    let x = null_vector_4x4(&m);
+    // NaN (X3 = 0) fails every comparison, as in OpenCV.
+    if !(x[2] * x[3] > 0.0) {
+        return false;
+    }
+    let q = [x[0] / x[3], x[1] / x[3], x[2] / x[3], x[3] / x[3]];
+    if !(q[2] < dist) {
+        return false;
+    }
+    let z2 = p[2][0] * q[0] + p[2][1] * q[1] + p[2][2] * q[2] + p[2][3] * q[3];
+    z2 > 0.0 && z2 < dist
+}
+
+/// recoverPose on normalized coordinates.
+pub fn recover_pose_normalized(e: &Mat3, p1: &[[f64; 2]], p2: &[[f64; 2]], dist: f64) -> Result<Pose> {
+    if p1.len() != p2.len() || p1.is_empty() {
+        return Err(Error::Odometry(format!(
+            "recoverPose needs the same non-zero number of points in both sets ({} vs {})",
+            p1.len(),
+            p2.len()
+        )));
+    }
+    if e.iter().flatten().any(|v| !v.is_finite()) {
+        return Err(Error::Odometry("recoverPose got a non-finite essential matrix".into()));
+    }
+    let (r1, r2, t) = decompose_essential(e);
+    let nt = [-t[0], -t[1], -t[2]];
+    let cands: [(&Mat3, &Vec3); 4] = [(&r1, &t), (&r2, &t), (&r1, &nt), (&r2, &nt)];
+    let masks: Vec<Vec<bool>> = cands
+        .iter()
+        .map(|(r, t)| p1.iter().zip(p2).map(|(&a, &b)| votes_for(r, t, a, b, dist)).collect())
+        .collect();
+    let votes: [usize; 4] = std::array::from_fn(|k| masks[k].iter().filter(|&&m| m).count());
+    // The first candidate whose count is ≥ all others.
+    let best = (0..4).find(|&k| (0..4).all(|j| votes[k] >= votes[j])).unwrap_or(0);
+    let (r, t) = cands[best];
+    Ok(Pose { r: *r, t: *t, inliers: votes[best], mask: masks[best].clone(), votes })
+}
+
+/// `cv2.recoverPose(E, points1, points2, focal=f, pp=(cx, cy))` without a mask.
+pub fn recover_pose(e: &Mat3, points1: &[[f32; 2]], points2: &[[f32; 2]], cam: &Camera) -> Result<Pose> {
+    cam.validate()?;
+    let p1: Vec<[f64; 2]> = points1.iter().map(|&p| cam.normalize(p)).collect();
+    let p2: Vec<[f64; 2]> = points2.iter().map(|&p| cam.normalize(p)).collect();
+    recover_pose_normalized(e, &p1, &p2, DISTANCE_THRESH)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::vo::five_point::tests::{rodrigues, scene};
+    use crate::vo::ransac::tests::{golden_points, SCENE_R, SCENE_T};
+    use crate::vo::ransac::{find_essential_mat, RansacParams};
+    use crate::vo::{mat_mul, skew};
+
+    #[test]
+    fn recovers_r_and_t_from_the_true_essential_matrix() {
+        let r = rodrigues([0.02, -0.04, 0.01]);
+        let t: [f64; 3] = [0.1, -0.05, -0.99];
+        let tn = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+        let (a, b) = scene(&r, t, 200, 5);
+        // Both signs of E must give the same pose.
+        for sign in [1.0, -1.0] {
+            let e = mat_mul(&skew(t), &r).map(|row| row.map(|v| v * sign / tn));
+            let pose = recover_pose_normalized(&e, &a, &b, DISTANCE_THRESH).unwrap();
+            for i in 0..3 {
+                assert!((pose.t[i] - t[i] / tn).abs() < 1e-12, "t {:?}", pose.t);
+                for j in 0..3 {
+                    assert!((pose.r[i][j] - r[i][j]).abs() < 1e-12, "R {:?}", pose.r);
+                }
+            }
+            // Depths are 5–25 (< 50) in camera 1 and the motion is short:
+            // every point votes for the right candidate, none for the others.
+            assert_eq!(pose.inliers, 200);
+            assert_eq!(pose.votes.iter().filter(|&&v| v == 200).count(), 1);
+        }
+    }
+
+    #[test]
+    fn matches_opencv_recover_pose() {
+        // cv2.recoverPose(E, p1, p2, focal=718.856, pp=(607.1928, 185.2157))
+        // on the RANSAC golden scene (testdata/gen_goldens.py), no mask: the
+        // 60 outliers vote too.
+        const OPENCV_POSE_INLIERS: usize = 272;
+        const OPENCV_R: [f64; 9] = [0.9994882662951008, -0.005078179988538283, -0.031581919295975695, 0.004920195910347442, 0.9999750021635226, -0.0050780626489777304, 0.031606917132446344, 0.004920074803003417, 0.9994882668912705];
+        const OPENCV_T: [f64; 3] = [0.049927594927897265, -0.019971864884850813, -0.9985531332271392];
+        let (p1, p2) = golden_points();
+        let cam = Camera::default();
+        let e = find_essential_mat(&p1, &p2, &cam, &RansacParams::default()).unwrap();
+        let pose = recover_pose(e.essential().unwrap(), &p1, &p2, &cam).unwrap();
+        assert_eq!(pose.inliers, OPENCV_POSE_INLIERS);
+        assert_eq!(pose.mask.iter().filter(|&&m| m).count(), OPENCV_POSE_INLIERS);
+        for k in 0..9 {
+            assert!((pose.r[k / 3][k % 3] - OPENCV_R[k]).abs() < 1e-10, "R {:?}", pose.r);
+        }
+        for k in 0..3 {
+            assert!((pose.t[k] - OPENCV_T[k]).abs() < 1e-10, "t {:?}", pose.t);
+        }
+        // And the truth: R within 1e-6, t within 1e-3 of the unit direction.
+        let tn = (SCENE_T[0].powi(2) + SCENE_T[1].powi(2) + SCENE_T[2].powi(2)).sqrt();
+        for i in 0..3 {
+            assert!((pose.t[i] - SCENE_T[i] / tn).abs() < 1e-3);
+            for j in 0..3 {
+                assert!((pose.r[i][j] - SCENE_R[i][j]).abs() < 1e-5);
+            }
+        }
+    }
+
+    #[test]
+    fn pixel_pipeline_recovers_forward_motion() {
+        let cam = Camera::default();
+        let r = rodrigues([0.0, 0.02, 0.0]);
+        let t = [0.0, 0.0, -1.0];
+        let (a, b) = scene(&r, t, 400, 8);
+        let px = |p: [f64; 2]| [(p[0] * cam.fx + cam.cx) as f32, (p[1] * cam.fy + cam.cy) as f32];
+        let p1: Vec<[f32; 2]> = a.iter().map(|&p| px(p)).collect();
+        let p2: Vec<[f32; 2]> = b.iter().map(|&p| px(p)).collect();
+        let e = find_essential_mat(&p1, &p2, &cam, &RansacParams::default()).unwrap();
+        let pose = recover_pose(e.essential().unwrap(), &p1, &p2, &cam).unwrap();
+        assert_eq!(pose.inliers, 400);
+        for i in 0..3 {
+            assert!((pose.t[i] - t[i]).abs() < 1e-3, "t {:?}", pose.t);
+            for j in 0..3 {
+                assert!((pose.r[i][j] - r[i][j]).abs() < 1e-4, "R {:?}", pose.r);
+            }
+        }
+    }
+}
