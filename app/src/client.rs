@@ -81,7 +81,8 @@ struct Slot {
 #[derive(Default)]
 struct Pool {
     script: String,
-    slots: Vec<Slot>,
+    /// `None` after a crash: respawned on the next request, never in a loop.
+    slots: Vec<Option<Slot>>,
     next_id: u32,
     jobs: HashMap<u32, Job>,
     in_flight: HashMap<u64, u32>,
@@ -127,7 +128,7 @@ fn on_worker_message(index: usize, m: FromWorker) {
         FromWorker::Ready => {
             let queued: Vec<(web_sys::Worker, JsValue)> = POOL.with(|p| {
                 let mut p = p.borrow_mut();
-                let Some(slot) = p.slots.get_mut(index) else { return vec![] };
+                let Some(Some(slot)) = p.slots.get_mut(index) else { return vec![] };
                 slot.ready = true;
                 let w = slot.worker.clone();
                 slot.queue.drain(..).map(|m| (w.clone(), m)).collect()
@@ -164,7 +165,7 @@ fn finish(id: u32, r: Result<SiftResult, String>) {
         let mut p = p.borrow_mut();
         let job = p.jobs.remove(&id)?;
         p.in_flight.remove(&job.key);
-        if let Some(s) = p.slots.get_mut(job.slot) {
+        if let Some(Some(s)) = p.slots.get_mut(job.slot) {
             s.load = s.load.saturating_sub(1);
         }
         if let Ok(res) = &r {
@@ -182,11 +183,9 @@ fn finish(id: u32, r: Result<SiftResult, String>) {
 fn on_worker_crash(index: usize) {
     let failed: Vec<u32> = POOL.with(|p| {
         let mut p = p.borrow_mut();
-        let script = p.script.clone();
-        if let Ok(fresh) = spawn(index, &script) {
-            if let Some(old) = p.slots.get_mut(index) {
+        if let Some(slot) = p.slots.get_mut(index) {
+            if let Some(old) = slot.take() {
                 old.worker.terminate();
-                *old = fresh;
             }
         }
         p.jobs.iter().filter(|(_, j)| j.slot == index).map(|(id, _)| *id).collect()
@@ -194,7 +193,7 @@ fn on_worker_crash(index: usize) {
     for id in failed {
         finish(
             id,
-            Err("the SIFT worker stopped unexpectedly (out of memory?); it was restarted, try again".into()),
+            Err("the SIFT worker failed (it could not start, or ran out of memory); try again".into()),
         );
     }
 }
@@ -240,21 +239,24 @@ pub fn sift(
                 return Ok(None);
             }
         }
-        while p.slots.len() < WORKERS {
-            let i = p.slots.len();
-            let script = p.script.clone();
-            match spawn(i, &script) {
-                Ok(s) => p.slots.push(s),
-                Err(e) => return Err((e, waiter)),
+        p.slots.resize_with(WORKERS, || None);
+        for i in 0..WORKERS {
+            if p.slots[i].is_none() {
+                let script = p.script.clone();
+                match spawn(i, &script) {
+                    Ok(s) => p.slots[i] = Some(s),
+                    Err(e) => return Err((e, waiter)),
+                }
             }
         }
-        let slot = (0..p.slots.len()).min_by_key(|&i| p.slots[i].load).unwrap_or(0);
+        let load = |s: &Option<Slot>| s.as_ref().map(|s| s.load).unwrap_or(usize::MAX);
+        let slot = (0..WORKERS).min_by_key(|&i| load(&p.slots[i])).unwrap_or(0);
         p.next_id = p.next_id.wrapping_add(1);
         let id = p.next_id;
         p.jobs.insert(id, Job { key, slot, waiters: vec![waiter] });
         p.in_flight.insert(key, id);
         let msg = ToWorker::Sift { id, bytes, lanes: lanes as u32 }.to_js();
-        let s = &mut p.slots[slot];
+        let Some(s) = p.slots[slot].as_mut() else { return Ok(None) };
         s.load += 1;
         if s.ready {
             Ok(Some((s.worker.clone(), msg)))

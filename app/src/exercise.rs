@@ -77,3 +77,36 @@ pub fn question(seed: u64, q: u32, frames: &[u32]) -> Option<Question> {
     };
     Some(Question { frame_id, feature_pos, algo, threshold })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn splitmix64_reference_values() {
+        // SplitMix64 with seed 0 (Vigna's reference implementation).
+        let mut r = Rng::new(0);
+        assert_eq!(r.next_u64(), 0xE220_A839_7B1D_CDAF);
+        assert_eq!(r.next_u64(), 0x6E78_9E6A_A1B9_65F4);
+    }
+
+    #[test]
+    fn questions_are_reproducible_and_in_range() {
+        let frames = [0, 1, 2, 3, 4, 5];
+        for q in 1..200 {
+            let a = question(7, q, &frames).unwrap();
+            assert_eq!(Some(a.clone()), question(7, q, &frames));
+            assert!((1..=5).contains(&a.frame_id));
+            assert!((0.0..1.0).contains(&a.feature_pos));
+            assert!(a.feature(1500) < 1500);
+            match a.algo {
+                "dt" => assert!((150..=320).contains(&a.threshold.parse::<u32>().unwrap())),
+                "nn" => assert!(a.threshold.is_empty() || (120..=300).contains(&a.threshold.parse::<u32>().unwrap())),
+                _ => assert!((0.5..=0.95).contains(&a.threshold.parse::<f64>().unwrap())),
+            }
+        }
+        assert_ne!(question(7, 1, &frames), question(8, 1, &frames));
+        assert_eq!(question(7, 1, &[3]), None, "a single frame has no pair");
+        assert_eq!(question(7, 1, &[3, 4]).unwrap().frame_id, 4);
+    }
+}

@@ -92,6 +92,10 @@ fn load_bytes_gen(lab: Lab, which: Which, label: String, bytes: Vec<u8>, g: u64)
             }
             match r {
                 Ok(res) => {
+                    // A good frame in this slot settles an earlier error about it.
+                    if lab.load_error.with_untracked(|e| e.as_ref().is_some_and(|e| e.starts_with(which.name()))) {
+                        lab.load_error.set(None);
+                    }
                     lab.frame(which).set(Some(Arc::new(FrameData::from_result(done_label, res, kept, lanes))));
                 }
                 Err(e) => lab.load_error.set(Some(format!("{} ({label}): {e}", which.name()))),

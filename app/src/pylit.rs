@@ -172,3 +172,44 @@ pub fn parse(text: &str) -> Result<Py, String> {
     }
     Ok(v)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reads_the_lab_tuple() {
+        let v = parse("ret value: ((523, 181), [(517, 183)], [61.400001525878906])").unwrap();
+        assert_eq!(
+            v,
+            Py::Tuple(vec![
+                Py::Tuple(vec![Py::Int(523), Py::Int(181)]),
+                Py::List(vec![Py::Tuple(vec![Py::Int(517), Py::Int(183)])]),
+                Py::List(vec![Py::Float(61.400001525878906, "61.400001525878906".into())]),
+            ])
+        );
+    }
+
+    #[test]
+    fn reads_empty_answer_numpy_scalars_and_negatives() {
+        assert_eq!(
+            parse("((0, 0), [], [])").unwrap(),
+            Py::Tuple(vec![Py::Tuple(vec![Py::Int(0), Py::Int(0)]), Py::List(vec![]), Py::List(vec![])])
+        );
+        let v = parse("[np.float32(61.4), -2, 1e3, (7,)]").unwrap();
+        let items = v.items().unwrap();
+        assert_eq!(items[0].number(), Some(61.4));
+        assert_eq!(items[1], Py::Int(-2));
+        assert_eq!(items[2].number(), Some(1000.0));
+        assert_eq!(items[3], Py::Tuple(vec![Py::Int(7)]));
+        // A parenthesised value without a comma is the value itself, as in Python.
+        assert_eq!(parse("(5)").unwrap(), Py::Int(5));
+    }
+
+    #[test]
+    fn reports_where_it_fails() {
+        assert_eq!(parse("((1, 2), [").unwrap_err(), "unexpected end at character 11");
+        assert!(parse("((1, 2) [])").unwrap_err().starts_with("expected ',' or ')'"));
+        assert!(parse("(1, 2) x").unwrap_err().contains("unexpected text after the value"));
+    }
+}

@@ -233,3 +233,64 @@ pub fn diagnose(answer: &str, truth: &MatchInfo, mistakes: &[(Mistake, MatchInfo
     };
     Diagnosis { correct, fields, likely }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn truth() -> MatchInfo {
+        MatchInfo { query: (523, 181), points: vec![(517, 183), (600, 12)], distances: vec![61.4, 105.0] }
+    }
+
+    #[test]
+    fn the_lab_answer_is_correct() {
+        let d = diagnose("ret value: ((523, 181), [(517, 183), (600, 12)], [61.400001525878906, 105.0])", &truth(), &[], None);
+        assert!(d.correct, "{d:?}");
+        assert!(d.fields.iter().all(|f| f.ok));
+    }
+
+    #[test]
+    fn names_float_and_rounded_coordinates() {
+        let d = diagnose("((523.7, 181.2), [(517, 183), (600, 12)], [61.400001525878906, 105.0])", &truth(), &[], None);
+        assert!(!d.correct);
+        assert!(d.fields[0].note.contains("float coordinates"), "{:?}", d.fields[0]);
+        assert!(d.fields[1].ok && d.fields[2].ok);
+        let d = diagnose("((524, 181), [(517, 183), (600, 12)], [61.400001525878906, 105.0])", &truth(), &[], Some((523.7, 181.2)));
+        assert!(d.fields[0].note.contains("rounded"), "{:?}", d.fields[0]);
+    }
+
+    #[test]
+    fn names_float32_repr_squared_and_order() {
+        let d = diagnose("((523, 181), [(517, 183), (600, 12)], [61.4, 105.0])", &truth(), &[], None);
+        assert!(d.fields[2].note.contains("printed differently"), "{:?}", d.fields[2]);
+        let d = diagnose("((523, 181), [(517, 183), (600, 12)], [3769.96, 11025.0])", &truth(), &[], None);
+        assert!(d.fields[2].note.contains("squared"), "{:?}", d.fields[2]);
+        let d = diagnose("((523, 181), [(600, 12), (517, 183)], [105.0, 61.400001525878906])", &truth(), &[], None);
+        assert!(d.fields[1].note.contains("wrong order"), "{:?}", d.fields[1]);
+    }
+
+    #[test]
+    fn empty_answer_rules() {
+        let empty = MatchInfo::default();
+        let d = diagnose("((523, 181), [], [])", &empty, &[], None);
+        assert!(d.fields[0].note.contains("((0, 0), [], [])"), "{:?}", d.fields[0]);
+        let d = diagnose("((0, 0), [], [])", &truth(), &[], None);
+        assert!(d.fields[0].note.contains("empty answer"), "{:?}", d.fields[0]);
+    }
+
+    #[test]
+    fn matches_a_core_mistake() {
+        let wrong = MatchInfo { query: (523, 181), points: vec![(517, 183)], distances: vec![61.4] };
+        let d = diagnose(&wrong.to_string(), &truth(), &[(Mistake::NnMoreThanOne, truth()), (Mistake::LessOrEqual, wrong.clone())], None);
+        assert!(!d.correct);
+        assert_eq!(d.likely, vec![Mistake::LessOrEqual.describe().to_string()]);
+    }
+
+    #[test]
+    fn unreadable_answers_say_why() {
+        let d = diagnose("hello", &truth(), &[], None);
+        assert_eq!(d.fields[0].field, "format");
+        let d = diagnose("((1, 2), [])", &truth(), &[], None);
+        assert!(d.fields[0].note.contains("has 2 parts"), "{:?}", d.fields[0]);
+    }
+}

@@ -115,3 +115,36 @@ impl UrlState {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trips_a_prepared_view() {
+        let st = UrlState {
+            src: Some("demo".into()),
+            frame: Some(1),
+            feature: Some(7),
+            algo: Some("nndr".into()),
+            t: Some("0.8".into()),
+            ex: Some(42),
+            q: Some(3),
+            lanes: Some(16),
+        };
+        let q = st.to_query();
+        assert_eq!(q, "?src=demo&frame=1&feature=7&algo=nndr&t=0.8&ex=42&q=3&lanes=16");
+        assert_eq!(UrlState::from_query(&q), st);
+    }
+
+    #[test]
+    fn tolerates_broken_links() {
+        let st = UrlState::from_query("?feature=abc&algo=dt&t=1%2E5&junk&frame=-3");
+        assert_eq!(st.feature, None);
+        assert_eq!(st.frame, None);
+        assert_eq!(st.algo.as_deref(), Some("dt"));
+        assert_eq!(st.t.as_deref(), Some("1.5"));
+        assert_eq!(UrlState::from_query(""), UrlState::default());
+        assert_eq!(UrlState::default().to_query(), "");
+    }
+}

@@ -12,16 +12,37 @@ use wasm_bindgen::{Clamped, JsCast};
 /// stay readable on gray).
 const PALETTE: [&str; 6] = ["#ff5a36", "#2f9bff", "#ffcc00", "#c04dff", "#00d1b2", "#ff7ac6"];
 
-/// (width of the previous frame, total width, height) of the composite.
-pub fn layout(prev: Option<&Frame>, cur: Option<&Frame>) -> (usize, usize, usize) {
-    let w1 = prev.map(|f| f.width).or(cur.map(|f| f.width)).unwrap_or(1241);
-    let w2 = cur.map(|f| f.width).unwrap_or(w1);
-    let h = prev.map(|f| f.height).max(cur.map(|f| f.height)).unwrap_or(376);
-    (w1, w1 + w2, h)
+/// Where the frames sit in the composite: the previous frame at (0, 0), the
+/// current one at (`dx`, `dy`); `w`×`h` in all.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Layout {
+    pub dx: f64,
+    pub dy: f64,
+    pub w: usize,
+    pub h: usize,
 }
 
-fn draw(canvas: &web_sys::HtmlCanvasElement, prev: Option<&Frame>, cur: Option<&Frame>) {
-    let (w1, w, h) = layout(prev, cur);
+impl Layout {
+    /// Side by side as `cv2.drawMatchesKnn` composes them, or stacked (twice the
+    /// size on a laptop screen).
+    pub fn new(prev: Option<&Frame>, cur: Option<&Frame>, stacked: bool) -> Layout {
+        let (w1, h1) = prev.or(cur).map(|f| (f.width, f.height)).unwrap_or((1241, 376));
+        let (w2, h2) = cur.map(|f| (f.width, f.height)).unwrap_or((w1, h1));
+        if stacked {
+            Layout { dx: 0.0, dy: h1 as f64, w: w1.max(w2), h: h1 + h2 }
+        } else {
+            Layout { dx: w1 as f64, dy: 0.0, w: w1 + w2, h: h1.max(h2) }
+        }
+    }
+
+    /// Whether a composite point lies on the previous frame.
+    pub fn on_prev(&self, x: f64, y: f64) -> bool {
+        if self.dy > 0.0 { y < self.dy } else { x < self.dx }
+    }
+}
+
+fn draw(canvas: &web_sys::HtmlCanvasElement, prev: Option<&Frame>, cur: Option<&Frame>, l: Layout) {
+    let (w, h) = (l.w, l.h);
     canvas.set_width(w as u32);
     canvas.set_height(h as u32);
     let Some(ctx) = canvas
@@ -34,25 +55,25 @@ fn draw(canvas: &web_sys::HtmlCanvasElement, prev: Option<&Frame>, cur: Option<&
     };
     ctx.set_fill_style_str("#1b1e24");
     ctx.fill_rect(0.0, 0.0, w as f64, h as f64);
-    for (f, x0) in [(prev, 0usize), (cur, w1)] {
+    for (f, x0, y0) in [(prev, 0.0, 0.0), (cur, l.dx, l.dy)] {
         let Some(f) = f else { continue };
         let mut rgba = Vec::with_capacity(f.gray.len() * 4);
         for &g in &f.gray {
             rgba.extend_from_slice(&[g, g, g, 255]);
         }
         if let Ok(img) = web_sys::ImageData::new_with_u8_clamped_array_and_sh(Clamped(&rgba), f.width as u32, f.height as u32) {
-            let _ = ctx.put_image_data(&img, x0 as f64, 0.0);
+            let _ = ctx.put_image_data(&img, x0, y0);
         }
     }
 }
 
 /// One SVG path drawing every keypoint as a circle of radius size/2 (one
 /// element instead of thousands keeps the toggle instant).
-fn keypoint_path(kps: &[KeyPoint], dx: f64) -> String {
+fn keypoint_path(kps: &[KeyPoint], dx: f64, dy: f64) -> String {
     let mut d = String::with_capacity(kps.len() * 40);
     for k in kps {
         let r = (k.size as f64 / 2.0).max(1.0);
-        let (x, y) = (k.x as f64 + dx, k.y as f64);
+        let (x, y) = (k.x as f64 + dx, k.y as f64 + dy);
         d.push_str(&format!("M{:.1} {:.1}a{r:.1} {r:.1} 0 1 0 {:.1} 0a{r:.1} {r:.1} 0 1 0 {:.1} 0", x - r, y, 2.0 * r, -2.0 * r));
     }
     d
@@ -62,19 +83,21 @@ fn keypoint_path(kps: &[KeyPoint], dx: f64) -> String {
 pub fn FramesView() -> impl IntoView {
     let lab = expect_context::<Lab>();
     let canvas_ref = NodeRef::<leptos::html::Canvas>::new();
-    Effect::new(move |_| {
-        let (p, c) = (lab.prev.get(), lab.cur.get());
-        if let Some(canvas) = canvas_ref.get() {
-            draw(&canvas, p.as_ref(), c.as_ref());
-        }
-    });
+    let stacked = RwSignal::new(true);
     let dims = move || {
         let (p, c) = (lab.prev.get(), lab.cur.get());
-        layout(p.as_ref(), c.as_ref())
+        Layout::new(p.as_ref(), c.as_ref(), stacked.get())
     };
+    Effect::new(move |_| {
+        let (p, c) = (lab.prev.get(), lab.cur.get());
+        let l = dims();
+        if let Some(canvas) = canvas_ref.get() {
+            draw(&canvas, p.as_ref(), c.as_ref(), l);
+        }
+    });
     let view_box = move || {
-        let (_, w, h) = dims();
-        format!("0 0 {w} {h}")
+        let l = dims();
+        format!("0 0 {} {}", l.w, l.h)
     };
     let kp_count = move |w: Which| lab.frame(w).with(|f| f.as_ref().map(|f| f.features.keypoints.len()).unwrap_or(0));
     let select_at = move |ev: web_sys::MouseEvent| {
@@ -83,10 +106,10 @@ pub fn FramesView() -> impl IntoView {
         if r.width() <= 0.0 || r.height() <= 0.0 {
             return;
         }
-        let (w1, w, h) = dims();
-        let x = (ev.client_x() as f64 - r.left()) * w as f64 / r.width();
-        let y = (ev.client_y() as f64 - r.top()) * h as f64 / r.height();
-        if x < w1 as f64 {
+        let l = dims();
+        let x = (ev.client_x() as f64 - r.left()) * l.w as f64 / r.width();
+        let y = (ev.client_y() as f64 - r.top()) * l.h as f64 / r.height();
+        if l.on_prev(x, y) {
             if let Some(i) = lab.prev.with_untracked(|p| p.as_ref().and_then(|p| nearest_keypoint(&p.features.keypoints, x, y))) {
                 lab.set_feature(i);
             }
@@ -115,9 +138,9 @@ pub fn FramesView() -> impl IntoView {
         if !lab.show_all.get() {
             return None;
         }
-        let (w1, _, _) = dims();
-        let p = lab.prev.with(|p| p.as_ref().map(|p| keypoint_path(&p.features.keypoints, 0.0))).unwrap_or_default();
-        let c = lab.cur.with(|c| c.as_ref().map(|c| keypoint_path(&c.features.keypoints, w1 as f64))).unwrap_or_default();
+        let l = dims();
+        let p = lab.prev.with(|p| p.as_ref().map(|p| keypoint_path(&p.features.keypoints, 0.0, 0.0))).unwrap_or_default();
+        let c = lab.cur.with(|c| c.as_ref().map(|c| keypoint_path(&c.features.keypoints, l.dx, l.dy))).unwrap_or_default();
         Some(view! {
             <path d=p class="kp-all"/>
             <path d=c class="kp-all"/>
@@ -126,7 +149,7 @@ pub fn FramesView() -> impl IntoView {
 
     let selection = move || {
         let a = lab.analysis.get()?.ok()?;
-        let (w1, _, _) = dims();
+        let l = dims();
         let p = lab.prev.get()?;
         let c = lab.cur.get()?;
         let q = *p.features.keypoints.get(a.feature)?;
@@ -145,8 +168,8 @@ pub fn FramesView() -> impl IntoView {
                 let k = c.features.keypoints.get(m.train_idx)?;
                 let col = PALETTE[i % PALETTE.len()];
                 Some(view! {
-                    <line x1=q.x x2=k.x as f64 + w1 as f64 y1=q.y y2=k.y stroke=col class="match-line"/>
-                    <circle cx=k.x as f64 + w1 as f64 cy=k.y r="4" stroke=col class="match-end"/>
+                    <line x1=q.x x2=k.x as f64 + l.dx y1=q.y y2=k.y as f64 + l.dy stroke=col class="match-line"/>
+                    <circle cx=k.x as f64 + l.dx cy=k.y as f64 + l.dy r="4" stroke=col class="match-end"/>
                 })
             })
             .collect_view();
@@ -154,7 +177,7 @@ pub fn FramesView() -> impl IntoView {
             let pts = info
                 .points
                 .iter()
-                .map(|&(x, y)| view! { <circle cx=x as f64 + w1 as f64 cy=y as f64 r="10" class="info-circle"/> })
+                .map(|&(x, y)| view! { <circle cx=x as f64 + l.dx cy=y as f64 + l.dy r="10" class="info-circle"/> })
                 .collect_view();
             view! {
                 <circle cx=info.query.0 as f64 cy=info.query.1 as f64 r="10" class="info-circle"/>
@@ -178,12 +201,27 @@ pub fn FramesView() -> impl IntoView {
                     <span class="sw sw-sel"></span>" selected keypoint (circle = scale, line = orientation) "
                     <span class="sw sw-line"></span>" lines to its matches (drawMatchesKnn) "
                     <span class="sw sw-info"></span>" matching_info points (view_info) · "
-                    "click the left frame to pick the nearest keypoint"
+                    "click the previous frame to pick the nearest keypoint"
                 </p>
             </div>
             <div class="frames-labels muted">
-                <span>{move || lab.prev.with(|p| p.as_ref().map(|p| format!("previous: {}", p.label)).unwrap_or_else(|| "previous frame".into()))}</span>
-                <span>{move || lab.cur.with(|c| c.as_ref().map(|c| format!("current: {}", c.label)).unwrap_or_else(|| "current frame".into()))}</span>
+                <span>
+                    {move || if stacked.get() { "top — " } else { "left — " }}
+                    {move || lab.prev.with(|p| p.as_ref().map(|p| format!("previous: {}", p.label)).unwrap_or_else(|| "previous frame".into()))}
+                </span>
+                <span>
+                    {move || if stacked.get() { "bottom — " } else { "right — " }}
+                    {move || lab.cur.with(|c| c.as_ref().map(|c| format!("current: {}", c.label)).unwrap_or_else(|| "current frame".into()))}
+                </span>
+                <label class="layout-toggle">
+                    <input
+                        type="checkbox"
+                        data-testid="side-by-side"
+                        prop:checked=move || !stacked.get()
+                        on:change=move |ev| stacked.set(!event_target_checked(&ev))
+                    />
+                    " side by side (as drawMatchesKnn)"
+                </label>
             </div>
             <div
                 class="stage"

@@ -13,6 +13,10 @@ pub fn ResultPanel() -> impl IntoView {
     let lab = expect_context::<Lab>();
     let copied = RwSignal::new(false);
     let tuple = move || lab.analysis.with(|a| a.as_ref().and_then(|r| r.as_ref().ok()).map(|a| a.tuple.clone()));
+    Effect::new(move |_| {
+        lab.analysis.track();
+        copied.set(false);
+    });
     let copy = move |_| {
         if let (Some(t), Some(w)) = (tuple(), web_sys::window()) {
             let _ = w.navigator().clipboard().write_text(&t);

@@ -1,0 +1,339 @@
+//! Component tests in headless Chromium (wasm-bindgen-test): the explorer
+//! mounted on OpenCV's own SIFT output for the demo frames
+//! (`tests/fixtures/golden/ipp/*.sift`) must show exactly what OpenCV's lab
+//! code printed for the same settings (`tests/fixtures/golden/get_info.jsonl`),
+//! and the controls, click-to-select, keyboard, errors, URL state and
+//! self-check must behave. SIFT itself is not run here (the core's wasm tests
+//! check it against the same goldens); the e2e test runs the real worker.
+#![cfg(target_arch = "wasm32")]
+
+use leptos::prelude::*;
+use siftlab_app::client::FrameData;
+use siftlab_app::components::{apply_url, url_state, Explorer};
+use siftlab_app::msg::{FromWorker, SiftResult, ToWorker};
+use siftlab_app::state::{nearest_keypoint, Lab, Source};
+use siftlab_app::urlstate::UrlState;
+use siftlab_core::sift::{Features, KeyPoint};
+use std::sync::Arc;
+use wasm_bindgen::JsCast;
+use wasm_bindgen_test::*;
+
+wasm_bindgen_test_configure!(run_in_browser);
+
+const GOLDEN: [&[u8]; 6] = [
+    include_bytes!("../../tests/fixtures/golden/ipp/000000.sift"),
+    include_bytes!("../../tests/fixtures/golden/ipp/000001.sift"),
+    include_bytes!("../../tests/fixtures/golden/ipp/000002.sift"),
+    include_bytes!("../../tests/fixtures/golden/ipp/000003.sift"),
+    include_bytes!("../../tests/fixtures/golden/ipp/000004.sift"),
+    include_bytes!("../../tests/fixtures/golden/ipp/000005.sift"),
+];
+const GET_INFO: &str = include_str!("../../tests/fixtures/golden/get_info.jsonl");
+
+/// Reads a `SIFTGLD1` file (format in tests/fixtures/README.md).
+fn golden(i: usize) -> (usize, usize, Features) {
+    let b = GOLDEN[i];
+    assert_eq!(&b[..8], b"SIFTGLD1");
+    let u = |o: usize| u32::from_le_bytes(b[o..o + 4].try_into().unwrap());
+    let (w, h, n) = (u(8) as usize, u(12) as usize, u(16) as usize);
+    let f = |o: usize| f32::from_le_bytes(b[o..o + 4].try_into().unwrap());
+    let mut keypoints = Vec::with_capacity(n);
+    for k in 0..n {
+        let o = 20 + 24 * k;
+        keypoints.push(KeyPoint {
+            x: f(o),
+            y: f(o + 4),
+            size: f(o + 8),
+            angle: f(o + 12),
+            response: f(o + 16),
+            octave: i32::from_le_bytes(b[o + 20..o + 24].try_into().unwrap()),
+        });
+    }
+    let d0 = 20 + 24 * n;
+    let descriptors = (0..n).map(|k| b[d0 + 128 * k..d0 + 128 * (k + 1)].try_into().unwrap()).collect();
+    (w, h, Features { keypoints, descriptors })
+}
+
+fn frame(i: usize) -> Arc<FrameData> {
+    let (w, h, features) = golden(i);
+    Arc::new(FrameData {
+        label: format!("gray/00/image_0/{i:06}.png"),
+        width: w,
+        height: h,
+        // The frame view only needs some pixels; a gradient is enough here.
+        gray: (0..w * h).map(|p| (p % 251) as u8).collect(),
+        features,
+        decode_ms: 0.0,
+        sift_ms: 0.0,
+        bytes: Arc::new(Vec::new()),
+        lanes: 8,
+    })
+}
+
+/// One `get_info` golden: (FRAME_ID, feature, algo, threshold text, ret value).
+struct Draw {
+    frame: usize,
+    feature: usize,
+    algo: String,
+    threshold: String,
+    ret: String,
+}
+
+fn field<'a>(line: &'a str, key: &str) -> &'a str {
+    let start = line.find(&format!("\"{key}\": ")).unwrap() + key.len() + 4;
+    let rest = &line[start..];
+    let end = rest.find([',', '}']).unwrap();
+    rest[..end].trim().trim_matches('"')
+}
+
+fn draws() -> Vec<Draw> {
+    GET_INFO
+        .lines()
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let ret_start = l.find("ret value: ").unwrap() + "ret value: ".len();
+            let ret_len = l[ret_start..].find("\\n").unwrap();
+            let t = field(l, "threshold");
+            Draw {
+                frame: field(l, "dataset_frame").parse().unwrap(),
+                feature: field(l, "feature").parse().unwrap(),
+                algo: field(l, "algo").to_string(),
+                // The lab's argparse reads -t as a float; the golden stores its repr.
+                threshold: if t == "null" { String::new() } else { t.to_string() },
+                ret: l[ret_start..ret_start + ret_len].to_string(),
+            }
+        })
+        .collect()
+}
+
+fn document() -> web_sys::Document {
+    web_sys::window().unwrap().document().unwrap()
+}
+
+/// Mounts the explorer on a fresh container and returns its state.
+fn mount(lab: Lab) -> web_sys::HtmlElement {
+    let div: web_sys::HtmlElement = document().create_element("div").unwrap().unchecked_into();
+    document().body().unwrap().append_child(&div).unwrap();
+    let handle = leptos::mount::mount_to(div.clone(), move || view! { <Explorer lab=lab/> });
+    handle.forget();
+    div
+}
+
+fn q(root: &web_sys::HtmlElement, testid: &str) -> Option<web_sys::HtmlElement> {
+    root.query_selector(&format!("[data-testid={testid}]")).unwrap().map(|e| e.unchecked_into())
+}
+
+fn text(root: &web_sys::HtmlElement, testid: &str) -> String {
+    q(root, testid).map(|e| e.text_content().unwrap_or_default()).unwrap_or_default()
+}
+
+fn set_value(root: &web_sys::HtmlElement, testid: &str, value: &str, event: &str) {
+    let el = q(root, testid).unwrap_or_else(|| panic!("no element {testid}"));
+    if let Some(i) = el.dyn_ref::<web_sys::HtmlInputElement>() {
+        i.set_value(value);
+    } else if let Some(s) = el.dyn_ref::<web_sys::HtmlSelectElement>() {
+        s.set_value(value);
+    } else if let Some(t) = el.dyn_ref::<web_sys::HtmlTextAreaElement>() {
+        t.set_value(value);
+    }
+    el.dispatch_event(&web_sys::Event::new_with_event_init_dict(event, &{
+        let i = web_sys::EventInit::new();
+        i.set_bubbles(true);
+        i
+    }).unwrap())
+    .unwrap();
+}
+
+fn loaded_lab(cur: usize) -> Lab {
+    let lab = Lab::new();
+    lab.prev.set(Some(frame(cur - 1)));
+    lab.cur.set(Some(frame(cur)));
+    lab.source.set(Source::Demo((0..6).collect()));
+    lab.frame_id.set(cur as u32);
+    lab
+}
+
+#[wasm_bindgen_test]
+async fn tuples_equal_opencv_lab_output_for_every_golden_draw() {
+    let all = draws();
+    assert!(all.len() >= 300, "{} draws", all.len());
+    let lab = loaded_lab(1);
+    let root = mount(lab);
+    let mut checked = 0;
+    let mut wrong = Vec::new();
+    for cur in 1..=5 {
+        lab.prev.set(Some(frame(cur - 1)));
+        lab.cur.set(Some(frame(cur)));
+        for d in all.iter().filter(|d| d.frame == cur) {
+            set_value(&root, "algo", &d.algo, "change");
+            leptos::task::tick().await;
+            set_value(&root, "threshold", &d.threshold, "input");
+            set_value(&root, "feature", &d.feature.to_string(), "input");
+            leptos::task::tick().await;
+            let got = text(&root, "result-tuple");
+            if got != d.ret {
+                wrong.push(format!("get_info -a {} -t {:?} {cur} {}:\n  app:    {got}\n  OpenCV: {}", d.algo, d.threshold, d.feature, d.ret));
+            }
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, all.len());
+    assert!(wrong.is_empty(), "{} of {checked} draws differ; first: {}", wrong.len(), wrong.iter().take(2).cloned().collect::<Vec<_>>().join("\n"));
+}
+
+#[wasm_bindgen_test]
+async fn shows_counts_explanation_and_error_for_bad_settings() {
+    let lab = loaded_lab(1);
+    let root = mount(lab);
+    leptos::task::tick().await;
+    assert_eq!(text(&root, "keypoint-count-prev"), golden(0).2.keypoints.len().to_string());
+    assert_eq!(text(&root, "keypoint-count-cur"), golden(1).2.keypoints.len().to_string());
+    assert!(q(&root, "busy").is_none());
+    // The step-by-step view: descriptor grid with 16 cells and 128 rays, the chart, the rule.
+    let desc = q(&root, "descriptor").unwrap();
+    assert_eq!(desc.query_selector_all("rect.cell").unwrap().length(), 16);
+    assert_eq!(desc.query_selector_all("line.ray").unwrap().length(), 128);
+    assert!(q(&root, "distance-chart").is_some());
+    assert!(text(&root, "rule").starts_with("nndr keeps the nearest if d1 < t·d2"), "{}", text(&root, "rule"));
+    // nndr with t > 1: the core's validation message, inline; no tuple.
+    set_value(&root, "threshold", "1.5", "input");
+    leptos::task::tick().await;
+    assert!(text(&root, "error").contains("outside [0, 1]"), "{}", text(&root, "error"));
+    assert_eq!(text(&root, "result-tuple"), "");
+    // Feature beyond the count: the core's message.
+    set_value(&root, "threshold", "0.8", "input");
+    set_value(&root, "feature", "99999", "input");
+    leptos::task::tick().await;
+    assert!(text(&root, "error").contains("99999"), "{}", text(&root, "error"));
+    set_value(&root, "feature", "3", "input");
+    leptos::task::tick().await;
+    assert!(q(&root, "error").is_none());
+    assert!(!text(&root, "result-tuple").is_empty());
+}
+
+#[wasm_bindgen_test]
+async fn a_load_error_is_inline_and_keeps_the_loaded_frames() {
+    // What the worker answers for a non-image (the core's decoder message)...
+    let got = std::cell::RefCell::new(Vec::new());
+    siftlab_app::worker::handle(ToWorker::Sift { id: 9, bytes: b"GIF89a not really".to_vec(), lanes: 8 }, &|m| {
+        got.borrow_mut().push(m)
+    });
+    let got = got.into_inner();
+    let FromWorker::Failed { id: 9, message } = got.last().unwrap().clone() else { panic!("{got:?}") };
+    assert!(message.contains("not an image") || message.contains("unsupported"), "{message}");
+    // ...is shown inline while the previous result stays on screen.
+    let lab = loaded_lab(1);
+    let root = mount(lab);
+    leptos::task::tick().await;
+    let before = text(&root, "result-tuple");
+    assert!(!before.is_empty());
+    lab.load_error.set(Some(format!("current frame (notes.txt): {message}")));
+    leptos::task::tick().await;
+    assert!(text(&root, "error").contains(&message));
+    assert_eq!(text(&root, "result-tuple"), before);
+    assert_eq!(text(&root, "keypoint-count-cur"), golden(1).2.keypoints.len().to_string());
+}
+
+#[wasm_bindgen_test]
+async fn click_selects_the_nearest_keypoint_and_arrows_step() {
+    let lab = loaded_lab(1);
+    let root = mount(lab);
+    leptos::task::tick().await;
+    let overlay = q(&root, "overlay").unwrap();
+    let r = overlay.get_bounding_client_rect();
+    assert!(r.width() > 0.0);
+    let prev = golden(0).2;
+    let (w, h) = (1241.0, 376.0 * 2.0); // stacked layout by default
+    for target in [17usize, 400, 1203] {
+        let k = prev.keypoints[target];
+        let cx = r.left() + k.x as f64 * r.width() / w;
+        let cy = r.top() + k.y as f64 * r.height() / h;
+        let init = web_sys::MouseEventInit::new();
+        init.set_client_x(cx.round() as i32);
+        init.set_client_y(cy.round() as i32);
+        init.set_bubbles(true);
+        overlay.dispatch_event(&web_sys::MouseEvent::new_with_mouse_event_init_dict("click", &init).unwrap()).unwrap();
+        leptos::task::tick().await;
+        // The click lands on a whole CSS pixel: the expected pick is the
+        // nearest keypoint to that pixel's image position.
+        let (ix, iy) = ((cx.round() - r.left()) * w / r.width(), (cy.round() - r.top()) * h / r.height());
+        let want = nearest_keypoint(&prev.keypoints, ix, iy).unwrap();
+        let got: usize = lab.feature_text.get_untracked().parse().unwrap();
+        assert_eq!(got, want);
+        let kg = prev.keypoints[got];
+        assert!(((kg.x as f64 - k.x as f64).powi(2) + (kg.y as f64 - k.y as f64).powi(2)).sqrt() < 3.0 * w / r.width());
+    }
+    // Keyboard: arrows, End, Home on the focused frames.
+    let stage: web_sys::HtmlElement = root.query_selector(".stage").unwrap().unwrap().unchecked_into();
+    stage.focus().unwrap();
+    lab.set_feature(10);
+    for (key, want) in [("ArrowRight", 11), ("ArrowLeft", 10), ("PageDown", 20), ("End", prev.keypoints.len() - 1), ("Home", 0)] {
+        let init = web_sys::KeyboardEventInit::new();
+        init.set_key(key);
+        init.set_bubbles(true);
+        stage.dispatch_event(&web_sys::KeyboardEvent::new_with_keyboard_event_init_dict("keydown", &init).unwrap()).unwrap();
+        leptos::task::tick().await;
+        assert_eq!(lab.feature_text.get_untracked(), want.to_string(), "{key}");
+    }
+}
+
+#[wasm_bindgen_test]
+async fn self_check_grades_the_golden_answer_and_names_a_mistake() {
+    let d = draws().into_iter().find(|d| d.frame == 1 && d.algo == "nndr" && d.ret != "((0, 0), [], [])").unwrap();
+    let lab = loaded_lab(1);
+    let root = mount(lab);
+    set_value(&root, "algo", "nndr", "change");
+    leptos::task::tick().await;
+    set_value(&root, "threshold", &d.threshold, "input");
+    set_value(&root, "feature", &d.feature.to_string(), "input");
+    leptos::task::tick().await;
+    set_value(&root, "answer", &format!("ret value: {}", d.ret), "input");
+    q(&root, "check").unwrap().click();
+    leptos::task::tick().await;
+    assert!(text(&root, "check-result").contains("Correct"), "{}", text(&root, "check-result"));
+    // Float coordinates instead of int(): named.
+    let p = golden(0).2.keypoints[d.feature];
+    let wrong = d.ret.replacen(&format!("(({}, {})", p.x.trunc(), p.y.trunc()), &format!("(({}, {})", p.x, p.y), 1);
+    assert_ne!(wrong, d.ret);
+    set_value(&root, "answer", &wrong, "input");
+    q(&root, "check").unwrap().click();
+    leptos::task::tick().await;
+    let r = text(&root, "check-result");
+    assert!(r.contains("Not the lab's answer") && r.contains("int()"), "{r}");
+}
+
+#[wasm_bindgen_test]
+async fn url_state_round_trips_through_a_fresh_lab() {
+    let lab = loaded_lab(3);
+    lab.algo.set("dt".into());
+    lab.set_threshold("212.5".into());
+    lab.set_feature(42);
+    lab.lanes.set(16);
+    let st = url_state(lab);
+    assert_eq!(st.to_query(), "?src=demo&frame=3&feature=42&algo=dt&t=212.5&lanes=16");
+    let fresh = Lab::new();
+    // A folder link cannot reopen the folder: it says so, and keeps the settings.
+    let mut folder = UrlState::from_query(&st.to_query());
+    folder.src = Some("folder".into());
+    apply_url(fresh, &folder);
+    assert_eq!(fresh.algo.get_untracked(), "dt");
+    assert_eq!(fresh.threshold(), "212.5");
+    assert_eq!(fresh.feature(), Some(42));
+    assert_eq!(fresh.lanes.get_untracked(), 16);
+    assert_eq!(fresh.frame_id.get_untracked(), 3);
+    assert!(fresh.load_error.get_untracked().unwrap().contains("open the folder"));
+}
+
+#[wasm_bindgen_test]
+fn worker_messages_round_trip_bit_for_bit() {
+    let (w, h, features) = golden(2);
+    let result = SiftResult { width: w, height: h, gray: vec![7; w * h], features, decode_ms: 1.5, sift_ms: 250.0 };
+    let m = FromWorker::Done { id: 3, result };
+    assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
+    let s = ToWorker::Sift { id: 4, bytes: vec![1, 2, 3], lanes: 16 };
+    assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
+    for m in [FromWorker::Ready, FromWorker::Progress { id: 1, stage: "x".into() }, FromWorker::Failed { id: 2, message: "m".into() }] {
+        assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
+    }
+    assert!(FromWorker::from_js(&wasm_bindgen::JsValue::from_str("junk")).is_err());
+}
