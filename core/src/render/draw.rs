@@ -157,6 +157,9 @@ const FILTER: [i64; 64] = [
 /// the line more opaque than a single `a/256` blend.
 #[inline]
 fn blend_aa(img: &mut RgbImage, x: i64, y: i64, c: Rgb<u8>, a: i64) {
+    if x < 0 || y < 0 || x >= img.width() as i64 || y >= img.height() as i64 {
+        return;
+    }
     let p = img.get_pixel_mut(x as u32, y as u32);
     for k in 0..3 {
         let mut v = p.0[k] as i64;
@@ -168,14 +171,12 @@ fn blend_aa(img: &mut RgbImage, x: i64, y: i64, c: Rgb<u8>, a: i64) {
 
 /// OpenCV's `LineAA`: a 3-pixel-wide Gaussian-filtered line between two
 /// points in XY_SHIFT fixed point, with its end-point coverage table. The
-/// line is clipped to the image shrunk by 2 pixels on every side (OpenCV
-/// draws the 3-pixel footprint without per-pixel bounds checks).
+/// segment is clipped to the image and every pixel of the footprint is
+/// bounds-checked (OpenCV 4.x; older releases clipped 2 pixels inside).
 pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
     let (w, h) = (img.width() as i64, img.height() as i64);
-    let (mut pt1, mut pt2) = ((p1.0 - XY_ONE * 2, p1.1 - XY_ONE * 2), (p2.0 - XY_ONE * 2, p2.1 - XY_ONE * 2));
-    let cw = ((w - 5) << XY_SHIFT) + 1;
-    let ch = ((h - 5) << XY_SHIFT) + 1;
-    if w < 5 || h < 5 || !clip_line(cw, ch, &mut pt1, &mut pt2) {
+    let (mut pt1, mut pt2) = (p1, p2);
+    if !clip_line(w << XY_SHIFT, h << XY_SHIFT, &mut pt1, &mut pt2) {
         return;
     }
     let (mut dx, mut dy) = (pt2.0 - pt1.0, pt2.1 - pt1.1);
@@ -236,10 +237,9 @@ pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
     let mut scount: i64 = 0;
     let sel = |n: i64| ((n >= 2) as i64 + 1) & (n | 2);
     if ax > ay {
-        // Pixel coordinates are offset by the 2-pixel margin removed above.
-        let mut x = (pt1.0 >> XY_SHIFT) + 2;
+        let mut x = pt1.0 >> XY_SHIFT;
         while ecount >= 0 {
-            let y = (pt1.1 >> XY_SHIFT) - 1 + 2;
+            let y = (pt1.1 >> XY_SHIFT) - 1;
             let ep_corr = ep[(sel(scount) * 3 + sel(ecount)) as usize];
             let dist = ((pt1.1 >> (XY_SHIFT - 5)) & 31) as usize;
             blend_aa(img, x, y, c, (ep_corr * FILTER[dist + 32] >> 8) & 0xff);
@@ -251,9 +251,9 @@ pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
             ecount -= 1;
         }
     } else {
-        let mut y = (pt1.1 >> XY_SHIFT) + 2;
+        let mut y = pt1.1 >> XY_SHIFT;
         while ecount >= 0 {
-            let x = (pt1.0 >> XY_SHIFT) - 1 + 2;
+            let x = (pt1.0 >> XY_SHIFT) - 1;
             let ep_corr = ep[(sel(scount) * 3 + sel(ecount)) as usize];
             let dist = ((pt1.0 >> (XY_SHIFT - 5)) & 31) as usize;
             blend_aa(img, x, y, c, (ep_corr * FILTER[dist + 32] >> 8) & 0xff);
@@ -628,4 +628,79 @@ mod tests {
         assert_eq!(img.get_pixel(29, 25).0, [255; 3]);
         assert_eq!(img.get_pixel(29, 26).0, [0; 3]);
     }
+
+    /// The 80x60 gradient gen_refs.py draws on, as BGR→RGB gray.
+    fn base() -> RgbImage {
+        RgbImage::from_fn(80, 60, |x, y| {
+            let v = ((x * 3 + y * 2) % 256) as u8;
+            Rgb([v, v, v])
+        })
+    }
+
+    fn reference(name: &str) -> RgbImage {
+        let path = format!("{}/src/render/testdata/{name}", env!("CARGO_MANIFEST_DIR"));
+        image::open(&path).unwrap_or_else(|e| panic!("{path}: {e}")).to_rgb8()
+    }
+
+    fn assert_same(out: &RgbImage, want: &RgbImage) {
+        let d: Vec<_> = out
+            .enumerate_pixels()
+            .filter(|(x, y, p)| p.0 != want.get_pixel(*x, *y).0)
+            .map(|(x, y, p)| (x, y, p.0, want.get_pixel(x, y).0))
+            .collect();
+        assert!(d.is_empty(), "{} pixels differ from OpenCV, first: {:?}", d.len(), &d[..d.len().min(6)]);
+    }
+
+    /// BGR Scalar from gen_refs.py as RGB.
+    fn bgr(b: i64, g: i64, r: i64) -> Rgb<u8> {
+        Rgb([r as u8, g as u8, b as u8])
+    }
+
+    #[test]
+    fn line_aa_with_shift_matches_opencv() {
+        let mut img = base();
+        let segs = [
+            ((5, 7), (1200, 300)),
+            ((1000, 900), (80, 20)),
+            ((300, 40), (310, 900)),
+            ((1270, 10), (-40, 950)),
+            ((-100, 500), (2000, 480)),
+            ((640, 480), (640, 481)),
+        ];
+        for (i, (p, q)) in segs.iter().enumerate() {
+            let i = i as i64;
+            line(&mut img, *p, *q, bgr(30 * i, 255 - 40 * i, 90), 1, true, 4);
+        }
+        assert_same(&img, &reference("lines_aa.png"));
+        // The first segment (0.3125, 0.4375) -> (75, 18.75) is drawn: its
+        // midpoint pixel took the colour (R=90 dominates the gray there).
+        let mid = img.get_pixel(37, 10).0;
+        assert_ne!(mid, base().get_pixel(37, 10).0);
+    }
+
+    #[test]
+    fn circle_aa_radius_three_matches_opencv() {
+        let mut img = base();
+        for (i, c) in [(325, 491), (8, 8), (1260, 950), (640, 300)].iter().enumerate() {
+            let i = i as i64;
+            circle(&mut img, *c, 48, bgr(0, 40 * i, 255 - 50 * i), 1, true, 4);
+        }
+        assert_same(&img, &reference("circles_aa.png"));
+    }
+
+    #[test]
+    fn thick_circle_line8_matches_opencv() {
+        let mut img = base();
+        for c in [(20, 30), (75, 2), (50, 45)] {
+            circle(&mut img, c, 10, Rgb([0, 255, 0]), 2, false, 0);
+        }
+        let want = reference("circles_thick2.png");
+        assert_same(&img, &want);
+        // Rim pixels: radius 10 left/right of (20, 30) are green, the centre is not.
+        assert_eq!(img.get_pixel(10, 30).0, [0, 255, 0]);
+        assert_eq!(img.get_pixel(30, 30).0, [0, 255, 0]);
+        assert_eq!(img.get_pixel(20, 20).0, [0, 255, 0]);
+        assert_ne!(img.get_pixel(20, 30).0, [0, 255, 0]);
+    }
+
 }
