@@ -21,6 +21,19 @@ pub fn Controls() -> impl IntoView {
         let f = lab.feature().map(|f| f as i64).unwrap_or(0);
         lab.set_feature((f + delta).clamp(0, n - 1) as usize);
     };
+    let link_copied = RwSignal::new(false);
+    let copy_link = move |_| {
+        if let Some(w) = web_sys::window() {
+            if let Ok(href) = w.location().href() {
+                let _ = w.navigator().clipboard().write_text(&href);
+                link_copied.set(true);
+            }
+        }
+    };
+    Effect::new(move |_| {
+        lab.analysis.track();
+        link_copied.set(false);
+    });
     view! {
         <section class="card controls" aria-label="Matching parameters">
             <h2>"2 · Strategy"</h2>
@@ -114,6 +127,10 @@ pub fn Controls() -> impl IntoView {
                         )
                     }}
                 </code>
+                " · "
+                <button class="link" on:click=copy_link title="the address bar always holds this view">
+                    {move || if link_copied.get() { "link copied" } else { "copy a link to this view" }}
+                </button>
             </p>
         </section>
     }
