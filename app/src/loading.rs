@@ -16,14 +16,15 @@ use wasm_bindgen_futures::JsFuture;
 /// core's pixel limit is anywhere near it.
 pub const MAX_FILE_BYTES: f64 = 200.0 * 1024.0 * 1024.0;
 
-/// The lab's layout inside a MyKITTI folder (`run_odometry.py`'s `%06d.png`).
+/// The lab's layout inside a MyKITTI folder (the core's `gray/00/image_0/%06d.png`).
 pub fn frame_path(id: u32) -> String {
-    format!("gray/00/image_0/{id:06}.png")
+    siftlab_core::dataset::frame_relative_path(id as usize)
 }
 
 /// The frame id of a path inside a MyKITTI folder, if it is one of its frames.
 pub fn frame_id_of(path: &str) -> Option<u32> {
-    let rest = path.rsplit_once("gray/00/image_0/")?.1;
+    let dir = format!("{}/", siftlab_core::dataset::FRAME_DIR);
+    let rest = path.rsplit_once(dir.as_str())?.1;
     let digits = rest.strip_suffix(".png")?;
     if digits.len() == 6 && digits.bytes().all(|b| b.is_ascii_digit()) {
         digits.parse().ok()

@@ -38,13 +38,13 @@ pub fn Explorer(lab: Lab) -> impl IntoView {
             <Status/>
             <Controls/>
             <FramesView/>
+            <ResultPanel/>
             <div class="columns">
-                <ResultPanel/>
                 <Explanation/>
-            </div>
-            <div class="columns">
-                <SelfCheck/>
-                <Exercises/>
+                <div class="side">
+                    <SelfCheck/>
+                    <Exercises/>
+                </div>
             </div>
         </main>
         <footer>
