@@ -7,7 +7,8 @@
 # and prints ours/OpenCV ratios. Targets (issue [1]): SIFT <= 0.5x OpenCV single-thread;
 # dt/nn/nndr over all 1500x1500 descriptor pairs <= 0.5x knnMatch(k=2).
 #
-# Usage: tests/scripts/bench_compare.sh [--dataset DIR] [--no-wasm] [--quick]
+# Usage: tests/scripts/bench_compare.sh [--dataset DIR] [--no-wasm] [--quick] [--report-only]
+# (--report-only prints the table again from the last run's results.)
 # Dataset default: ../shared/data/MyKITTI if it exists, else tests/fixtures/mykitti.
 # Needs python3 with opencv-contrib-python-headless==4.8.0.76 and numpy<2.
 set -euo pipefail
@@ -19,12 +20,14 @@ export PATH="$HOME/.cargo/bin:$PATH"
 DATASET=""
 WASM=1
 QUICK=0
+REPORT_ONLY=0
 while [ $# -gt 0 ]; do
     case "$1" in
         --dataset) DATASET="$2"; shift 2 ;;
         --no-wasm) WASM=0; shift ;;
         --quick) QUICK=1; shift ;;
-        -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+        --report-only) REPORT_ONLY=1; shift ;;
+        -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
         *) echo "bench_compare.sh: unknown argument $1" >&2; exit 2 ;;
     esac
 done
@@ -46,6 +49,7 @@ if [ "$QUICK" = 1 ]; then
     CRIT_ARGS+=(--warm-up-time 1 --measurement-time 2)
 fi
 
+if [ "$REPORT_ONLY" = 0 ]; then
 echo "== building benches" >&2
 cargo bench -p siftlab-core --bench sift --bench matching --no-run >&2
 
@@ -67,6 +71,7 @@ if [ "$WASM" = 1 ]; then
         cargo test --release --target wasm32-unknown-unknown -p siftlab-core --no-default-features \
         --test wasm_golden -- --nocapture 2>&1 | tee "$OUT/wasm.txt" >&2 \
         || echo "bench_compare.sh: the wasm test FAILED (see above); its timings are still reported" >&2
+fi
 fi
 
 python3 - "$OUT" "$ROOT/target/criterion" <<'PY'
