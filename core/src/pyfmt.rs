@@ -14,8 +14,13 @@ pub fn py_float(x: f64) -> String {
     if x == 0.0 {
         return if x.is_sign_negative() { "-0.0".into() } else { "0.0".into() };
     }
-    // Rust's `{:e}` gives the shortest round-trip digits, like Python's repr.
-    let sci = format!("{x:e}");
+    // `{:e}` finds how many digits the shortest round-trip form needs; when
+    // two digit strings of that length both round-trip, Python (David Gay's
+    // dtoa) takes the one nearer the exact value, ties to even, so the digits
+    // are then produced by exact rounding at that precision.
+    let shortest = format!("{x:e}");
+    let n = shortest.split_once('e').map_or(1, |(m, _)| m.chars().filter(|c| c.is_ascii_digit()).count());
+    let sci = format!("{:.*e}", n.saturating_sub(1), x);
     let (mant, exp) = sci.split_once('e').unwrap_or((&sci, "0"));
     let exp: i32 = exp.parse().unwrap_or(0);
     let neg = mant.starts_with('-');
@@ -87,6 +92,8 @@ mod tests {
         assert_eq!(py_float(123456789012345.6), "123456789012345.6");
         assert_eq!(py_float(-2.5), "-2.5");
         assert_eq!(py_float(0.0), "0.0");
+        // Two 16-digit strings round-trip; Python picks the nearer (a tie here: even).
+        assert_eq!(py_float(66.618316650390625), "66.61831665039062");
     }
 
     #[test]
