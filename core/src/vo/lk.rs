@@ -211,7 +211,7 @@ impl Deriv {
 
 /// The four 14-bit bilinear weights OpenCV derives from the fractional part
 /// (each product an f32 operation in source order, rounded half-even).
-#[inline]
+#[inline(always)]
 fn weights(a: f32, b: f32) -> [i32; 4] {
     let one = (1i32 << W_BITS) as f32;
     let w00 = ((1.0 - a) * (1.0 - b) * one).round_ties_even() as i32;
@@ -222,7 +222,7 @@ fn weights(a: f32, b: f32) -> [i32; 4] {
 
 /// Interpolates a 21×21 window of a padded u8 level at top-left `(ix, iy)`
 /// into values ×32 (`CV_DESCALE(..., W_BITS - 5)`).
-#[inline]
+#[inline(always)]
 fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut [[i32; WIN]; WIN]) {
     let stride = level.stride;
     let base = level.offset(ix, iy);
@@ -239,7 +239,7 @@ fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut [[i32; W
     }
 }
 
-#[inline]
+#[inline(always)]
 fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut [[i32; WIN]; WIN]) {
     for (y, row) in out.iter_mut().enumerate() {
         let r0 = &plane[base + y * stride..][..WIN + 1];
@@ -254,56 +254,71 @@ fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut
     }
 }
 
-/// Sum of `f(x, y)` over the window in the order OpenCV's SSE loop plus
-/// scalar tail produce (§2.4 "Structure tensor"): columns 0..15 into four
-/// lanes (column c → lane c mod 4), columns 16..20 into a scalar, then
-/// `S + ((L0 + L2) + (L1 + L3))`.
-#[inline]
-fn tensor_sum(a: &[[i32; WIN]; WIN], b: &[[i32; WIN]; WIN]) -> f32 {
-    let mut lanes = [0f32; 4];
-    let mut s = 0f32;
-    for (ra, rb) in a.iter().zip(b) {
-        for c in 0..16 {
-            lanes[c & 3] += (ra[c] * rb[c]) as f32;
+/// The three structure-tensor sums over the window in the order OpenCV's
+/// SSE loop plus scalar tail produce (§2.4 "Structure tensor"): columns
+/// 0..15 into four f32 lanes (column c → lane c mod 4, columns in increasing
+/// order), columns 16..20 into a scalar, then `S + ((L0 + L2) + (L1 + L3))`.
+#[inline(always)]
+fn tensor_sums(gx: &[[i32; WIN]; WIN], gy: &[[i32; WIN]; WIN]) -> (f32, f32, f32) {
+    let (mut l11, mut l12, mut l22) = ([0f32; 4], [0f32; 4], [0f32; 4]);
+    let (mut s11, mut s12, mut s22) = (0f32, 0f32, 0f32);
+    for (rx, ry) in gx.iter().zip(gy) {
+        for k in 0..4 {
+            for l in 0..4 {
+                let c = 4 * k + l;
+                l11[l] += (rx[c] * rx[c]) as f32;
+                l12[l] += (rx[c] * ry[c]) as f32;
+                l22[l] += (ry[c] * ry[c]) as f32;
+            }
         }
         for c in 16..WIN {
-            s += (ra[c] * rb[c]) as f32;
+            s11 += (rx[c] * rx[c]) as f32;
+            s12 += (rx[c] * ry[c]) as f32;
+            s22 += (ry[c] * ry[c]) as f32;
         }
     }
-    s + ((lanes[0] + lanes[2]) + (lanes[1] + lanes[3]))
+    let total = |s: f32, l: [f32; 4]| s + ((l[0] + l[2]) + (l[1] + l[3]));
+    (total(s11, l11), total(s12, l12), total(s22, l22))
 }
 
 /// The mismatch vector (b1, b2) in OpenCV's SIMD order (§2.4 step 3): pairs
 /// of products `d(c)·Z(c) + d(c+4)·Z(c+4)` added as exact integers, then
-/// rounded into eight f32 lanes; columns 16..20 into two scalars.
-#[inline]
+/// rounded into eight f32 lanes (P0..P3 = x/y of columns B, B+1; Q0..Q3 =
+/// x/y of columns B+2, B+3); columns 16..20 into two scalars.
+#[inline(always)]
 fn mismatch(
     d: &[[i32; WIN]; WIN],
     gx: &[[i32; WIN]; WIN],
     gy: &[[i32; WIN]; WIN],
 ) -> (f32, f32) {
-    let mut p = [0f32; 4];
-    let mut q = [0f32; 4];
+    let mut pq = [0f32; 8];
     let (mut s1, mut s2) = (0f32, 0f32);
     for y in 0..WIN {
         let (dr, xr, yr) = (&d[y], &gx[y], &gy[y]);
+        // Exact integer products first (vectorizes), then the pair sums.
+        let mut px = [0i32; 16];
+        let mut py = [0i32; 16];
+        for c in 0..16 {
+            px[c] = dr[c] * xr[c];
+            py[c] = dr[c] * yr[c];
+        }
         for base in [0usize, 8] {
-            let u = |c: usize, z: &[i32; WIN]| (dr[c] * z[c] + dr[c + 4] * z[c + 4]) as f32;
-            p[0] += u(base, xr);
-            p[1] += u(base, yr);
-            p[2] += u(base + 1, xr);
-            p[3] += u(base + 1, yr);
-            q[0] += u(base + 2, xr);
-            q[1] += u(base + 2, yr);
-            q[2] += u(base + 3, xr);
-            q[3] += u(base + 3, yr);
+            let mut u = [0f32; 8];
+            for k in 0..4 {
+                let c = base + k;
+                u[2 * k] = (px[c] + px[c + 4]) as f32;
+                u[2 * k + 1] = (py[c] + py[c + 4]) as f32;
+            }
+            for k in 0..8 {
+                pq[k] += u[k];
+            }
         }
         for c in 16..WIN {
             s1 += (dr[c] * xr[c]) as f32;
             s2 += (dr[c] * yr[c]) as f32;
         }
     }
-    let t: [f32; 4] = [p[0] + q[0], p[1] + q[1], p[2] + q[2], p[3] + q[3]];
+    let t = [pq[0] + pq[4], pq[1] + pq[5], pq[2] + pq[6], pq[3] + pq[7]];
     ((s1 + (t[0] + t[2])) * FLT_SCALE, (s2 + (t[1] + t[3])) * FLT_SCALE)
 }
 
@@ -315,7 +330,17 @@ fn out_of_bounds(ix: i32, iy: i32, w: usize, h: usize) -> bool {
 /// One level for one point (LKTrackerInvoker::operator()). `next` holds the
 /// stored estimate, updated in place; `status`/`err` are only touched at
 /// level 0.
+/// Window buffers reused across points (every element is written before
+/// it is read).
+struct Scratch {
+    tmpl: [[i32; WIN]; WIN],
+    gx: [[i32; WIN]; WIN],
+    gy: [[i32; WIN]; WIN],
+    warped: [[i32; WIN]; WIN],
+}
+
 #[allow(clippy::too_many_arguments)]
+#[inline(always)]
 fn track_point(
     prev: &Level,
     deriv: &Deriv,
@@ -328,6 +353,7 @@ fn track_point(
     max_level: usize,
     crit: (usize, f64),
     min_eig_threshold: f32,
+    scratch: &mut Scratch,
 ) {
     let scale = 1.0 / (1u32 << level) as f32;
     let p = [prev_pt[0] * scale, prev_pt[1] * scale];
@@ -344,17 +370,14 @@ fn track_point(
         return;
     }
     let wts = weights(q[0] - ix as f32, q[1] - iy as f32);
-    let mut tmpl = [[0i32; WIN]; WIN];
-    let mut gx = [[0i32; WIN]; WIN];
-    let mut gy = [[0i32; WIN]; WIN];
-    warp_window(prev, ix, iy, &wts, &mut tmpl);
+    let Scratch { tmpl, gx, gy, warped } = scratch;
+    warp_window(prev, ix, iy, &wts, tmpl);
     let dbase = deriv.offset(ix, iy);
-    warp_deriv(&deriv.ix, deriv.stride, dbase, &wts, &mut gx);
-    warp_deriv(&deriv.iy, deriv.stride, dbase, &wts, &mut gy);
+    warp_deriv(&deriv.ix, deriv.stride, dbase, &wts, gx);
+    warp_deriv(&deriv.iy, deriv.stride, dbase, &wts, gy);
 
-    let a11 = tensor_sum(&gx, &gx) * FLT_SCALE;
-    let a12 = tensor_sum(&gx, &gy) * FLT_SCALE;
-    let a22 = tensor_sum(&gy, &gy) * FLT_SCALE;
+    let (s11, s12, s22) = tensor_sums(gx, gy);
+    let (a11, a12, a22) = (s11 * FLT_SCALE, s12 * FLT_SCALE, s22 * FLT_SCALE);
     let det = a11 * a22 - a12 * a12;
     let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt())
         / (2 * WIN * WIN) as f32;
@@ -368,7 +391,6 @@ fn track_point(
 
     let mut n = [guess[0] - HALF_WIN, guess[1] - HALF_WIN];
     let mut prev_delta = [0f32; 2];
-    let mut warped = [[0i32; WIN]; WIN];
     let (max_count, eps2) = crit;
     for j in 0..max_count {
         let (jx, jy) = (n[0].floor() as i32, n[1].floor() as i32);
@@ -379,13 +401,13 @@ fn track_point(
             break;
         }
         let w = weights(n[0] - jx as f32, n[1] - jy as f32);
-        warp_window(next_lvl, jx, jy, &w, &mut warped);
-        for (wr, tr) in warped.iter_mut().zip(&tmpl) {
+        warp_window(next_lvl, jx, jy, &w, warped);
+        for (wr, tr) in warped.iter_mut().zip(tmpl.iter()) {
             for (v, t) in wr.iter_mut().zip(tr) {
                 *v -= t;
             }
         }
-        let (b1, b2) = mismatch(&warped, &gx, &gy);
+        let (b1, b2) = mismatch(warped, gx, gy);
         let delta = [(a12 * b2 - a22 * b1) * dinv, (a12 * b1 - a11 * b2) * dinv];
         n = [n[0] + delta[0], n[1] + delta[1]];
         *next = [n[0] + HALF_WIN, n[1] + HALF_WIN];
@@ -411,15 +433,65 @@ fn track_point(
             return;
         }
         let w = weights(m[0] - jx as f32, m[1] - jy as f32);
-        warp_window(next_lvl, jx, jy, &w, &mut warped);
+        warp_window(next_lvl, jx, jy, &w, warped);
         let mut errval = 0f32;
-        for (wr, tr) in warped.iter().zip(&tmpl) {
+        for (wr, tr) in warped.iter().zip(tmpl.iter()) {
             for (v, t) in wr.iter().zip(tr) {
                 errval += (v - t).abs() as f32;
             }
         }
         *err = errval / (32 * WIN * WIN) as f32;
     }
+}
+
+struct Job<'a> {
+    prep: &'a Prepared,
+    pts: &'a [[f32; 2]],
+    range: std::ops::Range<usize>,
+    max_level: usize,
+    crit: (usize, f64),
+    min_eig: f32,
+}
+
+#[inline(always)]
+fn run_job_body(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
+    let prep = job.prep;
+    let mut scratch = Box::new(Scratch {
+        tmpl: [[0; WIN]; WIN],
+        gx: [[0; WIN]; WIN],
+        gy: [[0; WIN]; WIN],
+        warped: [[0; WIN]; WIN],
+    });
+    for level in (0..=job.max_level).rev() {
+        let (pl, dl, nl) = (&prep.prev[level], &prep.derivs[level], &prep.next[level]);
+        for (k, i) in job.range.clone().enumerate() {
+            track_point(
+                pl, dl, nl, job.pts[i], &mut np[k], &mut st[k], &mut er[k], level, job.max_level,
+                job.crit, job.min_eig, &mut scratch,
+            );
+        }
+    }
+}
+
+/// The same code compiled for AVX2: only integer ops and separately rounded
+/// f32 adds/multiplies are involved (Rust never contracts to FMA), so the
+/// wider vectors change the speed, not a bit of the result.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn run_job_avx2(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
+    run_job_body(job, np, st, er)
+}
+
+fn run_job(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU supports AVX2 (checked just above).
+            unsafe { run_job_avx2(job, np, st, er) };
+            return;
+        }
+    }
+    run_job_body(job, np, st, er)
 }
 
 /// Pyramids and derivatives of a frame pair, built once per call.
@@ -459,15 +531,8 @@ fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams) -> LkRes
     // Points are independent (OpenCV runs them in parallel too, each result
     // written by one task), so splitting them over threads changes nothing.
     let run = |range: std::ops::Range<usize>, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]| {
-        for level in (0..=max_level).rev() {
-            let (pl, dl, nl) = (&prep.prev[level], &prep.derivs[level], &prep.next[level]);
-            for (k, i) in range.clone().enumerate() {
-                track_point(
-                    pl, dl, nl, pts[i], &mut np[k], &mut st[k], &mut er[k], level, max_level, crit,
-                    min_eig,
-                );
-            }
-        }
+        let job = Job { prep, pts, range, max_level, crit, min_eig };
+        run_job(&job, np, st, er);
     };
 
     #[cfg(not(target_arch = "wasm32"))]

@@ -24,8 +24,7 @@ use crate::{Error, GrayImage, Result};
 pub type Detector = Box<dyn FnMut(&GrayImage) -> Vec<[f32; 2]> + Send>;
 
 /// The lab's detector: `cv2.SIFT_create(nfeatures=1500).detect(img)` positions.
-pub fn sift_detector() -> Detector {
-    let params = SiftParams::default();
+pub fn sift_detector(params: SiftParams) -> Detector {
     Box::new(move |img| detect(img, &params).iter().map(|k| [k.x, k.y]).collect())
 }
 
@@ -72,9 +71,10 @@ pub struct Odometry {
 }
 
 impl Odometry {
-    /// The lab's pipeline with SIFT (nfeatures = 1500).
+    /// The lab's pipeline with SIFT (nfeatures = 1500, OpenCV's SIMD width of
+    /// this CPU so the keypoints equal the wheel's on the same machine).
     pub fn new(cam: Camera) -> Result<Odometry> {
-        Odometry::with_detector(cam, sift_detector())
+        Odometry::with_detector(cam, sift_detector(SiftParams::for_host()))
     }
 
     /// The same loop with another point source (tests, or precomputed points).
