@@ -140,6 +140,8 @@ fn on_worker_message(index: usize, m: FromWorker) {
         FromWorker::Progress { id, stage } => with_progress(id, &stage),
         FromWorker::Done { id, result } => finish(id, Ok(result)),
         FromWorker::Failed { id, message } => finish(id, Err(message)),
+        // Odometry runs have their own worker (see `run_vo`).
+        FromWorker::VoStep { .. } | FromWorker::VoDone { .. } => {}
     }
 }
 
@@ -272,4 +274,64 @@ pub fn sift(
         Ok(None) => {}
         Err((e, w)) => (w.done)(Err(e)),
     }
+}
+
+/// A visual-odometry run in its own worker (so the SIFT workers stay free);
+/// dropping or [`stop_vo`] terminates it.
+struct VoRun {
+    worker: web_sys::Worker,
+    _handlers: Vec<Closure<dyn FnMut(JsValue)>>,
+}
+
+impl Drop for VoRun {
+    fn drop(&mut self) {
+        self.worker.terminate();
+    }
+}
+
+thread_local! {
+    static VO_RUN: RefCell<Option<VoRun>> = const { RefCell::new(None) };
+}
+
+/// Starts the lab's odometry loop on `frames`; `on_event` gets every
+/// `VoStep`, then `VoDone` or `Failed`. A new run replaces the previous one.
+pub fn run_vo(frames: Vec<Vec<u8>>, poses: String, on_event: impl Fn(FromWorker) + 'static) -> Result<(), String> {
+    stop_vo();
+    let script = POOL.with(|p| p.borrow().script.clone());
+    let opts = web_sys::WorkerOptions::new();
+    opts.set_type(web_sys::WorkerType::Module);
+    let worker = web_sys::Worker::new_with_options(&script, &opts).map_err(|e| format!("cannot start the worker: {e:?}"))?;
+    let on_event = std::rc::Rc::new(on_event);
+    let request = RefCell::new(Some(ToWorker::Vo { id: 1, frames, poses }.to_js()));
+    let w = worker.clone();
+    let ev = on_event.clone();
+    let on_message = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
+        let data = e.unchecked_into::<web_sys::MessageEvent>().data();
+        match FromWorker::from_js(&data) {
+            Ok(FromWorker::Ready) => {
+                if let Some(m) = request.borrow_mut().take() {
+                    let _ = w.post_message(&m);
+                }
+            }
+            Ok(m) => ev(m),
+            Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
+        }
+    });
+    let on_error = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
+        if let Some(e) = e.dyn_ref::<web_sys::ErrorEvent>() {
+            e.prevent_default();
+        }
+        on_event(FromWorker::Failed { id: 1, message: "the odometry worker failed (it could not start, or ran out of memory)".into() });
+    });
+    worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+    worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
+    VO_RUN.with(|r| *r.borrow_mut() = Some(VoRun { worker, _handlers: vec![on_message, on_error] }));
+    Ok(())
+}
+
+/// Stops a running odometry (its worker is terminated).
+pub fn stop_vo() {
+    // Take it out first: dropping terminates the worker, outside the borrow.
+    let old = VO_RUN.with(|r| r.borrow_mut().take());
+    drop(old);
 }

@@ -35,6 +35,7 @@ pub fn frame_id_of(path: &str) -> Option<u32> {
 
 thread_local! {
     static FOLDER: RefCell<BTreeMap<u32, web_sys::File>> = const { RefCell::new(BTreeMap::new()) };
+    static FOLDER_POSES: RefCell<Option<web_sys::File>> = const { RefCell::new(None) };
 }
 
 static NEXT_JOB: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -228,6 +229,7 @@ pub fn load_demo(lab: Lab, frame_id: Option<u32>) {
 /// The files of a directory picker: keeps the frames in the lab's layout.
 pub fn open_folder(lab: Lab, files: web_sys::FileList, frame_id: Option<u32>) {
     let mut frames = BTreeMap::new();
+    let mut poses = None;
     let mut any = false;
     for i in 0..files.length() {
         if let Some(f) = files.get(i) {
@@ -239,6 +241,8 @@ pub fn open_folder(lab: Lab, files: web_sys::FileList, frame_id: Option<u32>) {
                 .unwrap_or_else(|| f.name());
             if let Some(id) = frame_id_of(&path) {
                 frames.insert(id, f);
+            } else if path.ends_with("poses/00.txt") {
+                poses = Some(f);
             }
         }
     }
@@ -255,6 +259,9 @@ pub fn open_folder(lab: Lab, files: web_sys::FileList, frame_id: Option<u32>) {
     }
     let ids: Vec<u32> = frames.keys().copied().collect();
     FOLDER.with(|f| *f.borrow_mut() = frames);
+    FOLDER_POSES.with(|p| *p.borrow_mut() = poses);
+    // A folder in the right layout settles any earlier loading error.
+    lab.load_error.set(None);
     let fid = frame_id.unwrap_or_else(|| ids.iter().copied().find(|&i| i >= 1 && ids.contains(&(i - 1))).unwrap_or(1));
     lab.source.set(Source::Folder(ids));
     load_pair(lab, fid);
@@ -269,4 +276,34 @@ pub fn reanalyse(lab: Lab) {
             }
         }
     }
+}
+
+/// Frames 0..n and the ground-truth poses of the current source, for the
+/// odometry view (the lab's `view_trajectory` starts at frame 0).
+pub async fn vo_inputs(source: &Source, n: u32) -> Result<(Vec<Vec<u8>>, String), String> {
+    if let Some(missing) = (0..n).find(|i| !source.frames().contains(i)) {
+        return Err(format!("{} is missing: the odometry needs frames 0 … {}", frame_path(missing), n.saturating_sub(1)));
+    }
+    let mut frames = Vec::with_capacity(n as usize);
+    let poses = match source {
+        Source::Demo(_) => {
+            for i in 0..n {
+                frames.push(fetch_bytes(&format!("demo/{}", frame_path(i))).await?);
+            }
+            fetch_text("demo/poses/00.txt").await?
+        }
+        Source::Folder(_) => {
+            for i in 0..n {
+                let file = FOLDER.with(|f| f.borrow().get(&i).cloned()).ok_or("open the folder again")?;
+                frames.push(read_file(&file).await.map_err(|e| format!("{}: {e}", frame_path(i)))?);
+            }
+            let file = FOLDER_POSES
+                .with(|p| p.borrow().clone())
+                .ok_or("the folder has no poses/00.txt: the lab takes the scale from the ground-truth poses")?;
+            let bytes = read_file(&file).await?;
+            String::from_utf8(bytes).map_err(|_| "poses/00.txt is not text".to_string())?
+        }
+        Source::Files => return Err("the odometry needs the demo or a MyKITTI folder (frames 0, 1, 2, …)".into()),
+    };
+    Ok((frames, poses))
 }

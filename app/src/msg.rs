@@ -16,6 +16,9 @@ pub enum ToWorker {
     /// Decode `bytes` (PNG/JPEG) as the core does and run SIFT with the lab's
     /// parameters; `lanes` is OpenCV's SIMD width to reproduce (8 = AVX2, 16 = AVX-512).
     Sift { id: u32, bytes: Vec<u8>, lanes: u32 },
+    /// Run the lab's visual odometry over `frames` (frame 0 first) with the
+    /// ground-truth poses (`poses/00.txt` text) for the scale.
+    Vo { id: u32, frames: Vec<Vec<u8>>, poses: String },
 }
 
 /// What SIFT produced for one frame, plus the gray image it ran on.
@@ -39,6 +42,11 @@ pub enum FromWorker {
     Done { id: u32, result: SiftResult },
     /// A user-facing message (the core's `Error` Display).
     Failed { id: u32, message: String },
+    /// One odometry step done: the estimated and true camera positions.
+    VoStep { id: u32, frame: u32, total: u32, position: [f64; 3], truth: Option<[f64; 3]>, tracked: u32, redetected: bool },
+    /// The run is over: trajectory error (RMSE, GT scale, no alignment) and
+    /// the lab's trajectory window as PNG (the core's renderer, as the CLI writes it).
+    VoDone { id: u32, ate: f64, png: Vec<u8>, ms: f64 },
 }
 
 fn set(o: &Object, k: &str, v: &JsValue) {
@@ -69,6 +77,19 @@ fn get_bytes(o: &JsValue, k: &str) -> Result<Vec<u8>, String> {
         .map_err(|_| format!("message field {k} is not a Uint8Array"))
 }
 
+fn get_vec3(o: &JsValue, k: &str) -> Result<Option<[f64; 3]>, String> {
+    let v = get(o, k)?;
+    if v.is_null() || v.is_undefined() {
+        return Ok(None);
+    }
+    let a = v.dyn_into::<js_sys::Float64Array>().map_err(|_| format!("message field {k} is not a Float64Array"))?.to_vec();
+    <[f64; 3]>::try_from(a.as_slice()).map(Some).map_err(|_| format!("message field {k} needs 3 numbers"))
+}
+
+fn vec3(v: &[f64; 3]) -> JsValue {
+    js_sys::Float64Array::from(v.as_slice()).into()
+}
+
 fn kind(o: &JsValue) -> Result<String, String> {
     get_str(o, "type")
 }
@@ -83,6 +104,16 @@ impl ToWorker {
                 set(&o, "lanes", &(*lanes).into());
                 set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
             }
+            ToWorker::Vo { id, frames, poses } => {
+                set(&o, "type", &"vo".into());
+                set(&o, "id", &(*id).into());
+                let arr = js_sys::Array::new();
+                for f in frames {
+                    arr.push(&Uint8Array::from(f.as_slice()));
+                }
+                set(&o, "frames", &arr);
+                set(&o, "poses", &poses.as_str().into());
+            }
         }
         o.into()
     }
@@ -94,6 +125,15 @@ impl ToWorker {
                 bytes: get_bytes(v, "bytes")?,
                 lanes: get_u32(v, "lanes")?,
             }),
+            "vo" => {
+                let frames = get(v, "frames")?
+                    .dyn_into::<js_sys::Array>()
+                    .map_err(|_| "message field frames is not an array".to_string())?
+                    .iter()
+                    .map(|f| f.dyn_into::<Uint8Array>().map(|a| a.to_vec()).map_err(|_| "a frame is not a Uint8Array".to_string()))
+                    .collect::<Result<Vec<_>, _>>()?;
+                Ok(ToWorker::Vo { id: get_u32(v, "id")?, frames, poses: get_str(v, "poses")? })
+            }
             other => Err(format!("unknown message type {other:?}")),
         }
     }
@@ -116,6 +156,23 @@ impl FromWorker {
                 set(&o, "type", &"failed".into());
                 set(&o, "id", &(*id).into());
                 set(&o, "message", &message.as_str().into());
+            }
+            FromWorker::VoStep { id, frame, total, position, truth, tracked, redetected } => {
+                set(&o, "type", &"voStep".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "frame", &(*frame).into());
+                set(&o, "total", &(*total).into());
+                set(&o, "position", &vec3(position));
+                set(&o, "truth", &truth.as_ref().map(vec3).unwrap_or(JsValue::NULL));
+                set(&o, "tracked", &(*tracked).into());
+                set(&o, "redetected", &(*redetected).into());
+            }
+            FromWorker::VoDone { id, ate, png, ms } => {
+                set(&o, "type", &"voDone".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "ate", &(*ate).into());
+                set(&o, "png", &Uint8Array::from(png.as_slice()).into());
+                set(&o, "ms", &(*ms).into());
             }
             FromWorker::Done { id, result } => {
                 set(&o, "type", &"done".into());
@@ -146,6 +203,21 @@ impl FromWorker {
             "ready" => Ok(FromWorker::Ready),
             "progress" => Ok(FromWorker::Progress { id: get_u32(v, "id")?, stage: get_str(v, "stage")? }),
             "failed" => Ok(FromWorker::Failed { id: get_u32(v, "id")?, message: get_str(v, "message")? }),
+            "voStep" => Ok(FromWorker::VoStep {
+                id: get_u32(v, "id")?,
+                frame: get_u32(v, "frame")?,
+                total: get_u32(v, "total")?,
+                position: get_vec3(v, "position")?.ok_or("voStep without a position")?,
+                truth: get_vec3(v, "truth")?,
+                tracked: get_u32(v, "tracked")?,
+                redetected: get(v, "redetected")?.as_bool().unwrap_or(false),
+            }),
+            "voDone" => Ok(FromWorker::VoDone {
+                id: get_u32(v, "id")?,
+                ate: get_f64(v, "ate")?,
+                png: get_bytes(v, "png")?,
+                ms: get_f64(v, "ms")?,
+            }),
             "done" => {
                 let width = get_u32(v, "width")? as usize;
                 let height = get_u32(v, "height")? as usize;

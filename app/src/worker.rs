@@ -49,7 +49,54 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
                 },
             });
         }
+        ToWorker::Vo { id, frames, poses } => {
+            if let Err(message) = odometry(id, &frames, &poses, post) {
+                post(FromWorker::Failed { id, message });
+            }
+        }
     }
+}
+
+/// The lab's `view_trajectory` loop, one message per frame so the page can
+/// draw the trajectory as it grows.
+fn odometry(id: u32, frames: &[Vec<u8>], poses: &str, post: &dyn Fn(FromWorker)) -> Result<(), String> {
+    use siftlab_core::dataset::{parse_poses, position};
+    use siftlab_core::render::{encode_png, trajectory};
+    use siftlab_core::vo::{metrics::ate_rmse, odometry::Odometry, Camera};
+    let t0 = now_ms();
+    let poses = parse_poses(poses).map_err(|e| format!("poses/00.txt: {e}"))?;
+    if poses.len() < frames.len() {
+        return Err(format!(
+            "poses/00.txt has {} poses but {} frames were asked for: the lab takes the scale from the ground truth of every frame",
+            poses.len(),
+            frames.len()
+        ));
+    }
+    let mut odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
+    let (mut est, mut truth) = (Vec::new(), Vec::new());
+    let total = frames.len() as u32;
+    for (i, bytes) in frames.iter().enumerate() {
+        let img = GrayImage::decode(bytes).map_err(|e| format!("frame {i}: {e}"))?;
+        let step = odo.step(&img, poses.get(i)).map_err(|e| e.to_string())?;
+        let gt = step.gt_position.or_else(|| poses.get(i).map(position));
+        est.push(step.position);
+        if let Some(g) = gt {
+            truth.push(g);
+        }
+        post(FromWorker::VoStep {
+            id,
+            frame: i as u32,
+            total,
+            position: step.position,
+            truth: gt,
+            tracked: step.tracked as u32,
+            redetected: step.redetected,
+        });
+    }
+    let ate = ate_rmse(&est, &truth).map_err(|e| e.to_string())?;
+    let png = encode_png(&trajectory::draw(&truth, &est, &trajectory::Style::default())).map_err(|e| e.to_string())?;
+    post(FromWorker::VoDone { id, ate, png, ms: now_ms() - t0 });
+    Ok(())
 }
 
 /// Entry point of the worker script: listen for requests, then say we are ready

@@ -337,3 +337,32 @@ fn worker_messages_round_trip_bit_for_bit() {
     }
     assert!(FromWorker::from_js(&wasm_bindgen::JsValue::from_str("junk")).is_err());
 }
+
+#[wasm_bindgen_test]
+fn odometry_messages_round_trip_and_bad_poses_are_named() {
+    let v = ToWorker::Vo { id: 5, frames: vec![vec![1, 2], vec![3]], poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
+    assert_eq!(ToWorker::from_js(&v.to_js()).unwrap(), v);
+    for m in [
+        FromWorker::VoStep { id: 5, frame: 2, total: 6, position: [0.5, -0.25, 1.75], truth: Some([0.0, 0.0, 2.0]), tracked: 1400, redetected: true },
+        FromWorker::VoStep { id: 5, frame: 0, total: 6, position: [0.0; 3], truth: None, tracked: 0, redetected: false },
+        FromWorker::VoDone { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5 },
+    ] {
+        assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
+    }
+    let run = |frames: Vec<Vec<u8>>, poses: &str| {
+        let got = std::cell::RefCell::new(Vec::new());
+        siftlab_app::worker::handle(ToWorker::Vo { id: 1, frames, poses: poses.into() }, &|m| got.borrow_mut().push(m));
+        got.into_inner()
+    };
+    // Malformed poses and too few poses fail before any SIFT runs, with the file named.
+    let got = run(vec![vec![0; 4]; 2], "1 0 0 0\n");
+    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(message.starts_with("poses/00.txt"), "{message}");
+    let got = run(vec![vec![0; 4]; 3], "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n");
+    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(message.contains("2 poses but 3 frames"), "{message}");
+    // A frame that is not an image: named by its index.
+    let got = run(vec![b"nope".to_vec(); 2], "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n");
+    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(message.starts_with("frame 0: not an image"), "{message}");
+}

@@ -247,7 +247,7 @@ test('bad files and folders show an inline error and keep what was loaded', asyn
   assert.equal(await tuple(), before);
   // The real layout works, and a missing frame is named.
   await page.setInputFiles(tid('folder'), path.join(ROOT, DATASET));
-  await page.waitForSelector(tid('busy'));
+  await page.waitForSelector(tid('error'), { state: 'detached' });
   await idle();
   assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', '42']));
   await page.fill(tid('frame-id'), '9');
@@ -308,4 +308,25 @@ test('narrow screen layout', async () => {
   await page.goto(`${BASE}?lanes=${LANES}&feature=300`);
   await idle();
   await page.screenshot({ path: path.join(SHOTS, 'narrow.png'), fullPage: true });
+});
+
+test('visual odometry on the demo frames equals the CLI view_trajectory', async () => {
+  await page.goto(`${BASE}?lanes=${LANES}`);
+  await idle();
+  const n = fs.readdirSync(path.join(ROOT, DATASET, 'gray/00/image_0')).filter((f) => /^\d{6}\.png$/.test(f)).length;
+  assert.equal(await page.inputValue(tid('vo-frames')), String(n));
+  await page.click(tid('vo-run'));
+  await page.waitForSelector(tid('vo-ate'), { timeout: 300000 });
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-'));
+  const out = execFileSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', String(n)], { cwd: tmp, encoding: 'utf8' });
+  const ate = out.match(/trajectory error \(ATE RMSE, \d+ frames\): ([\d.]+) m/)[1];
+  assert.equal(await page.textContent(tid('vo-ate')), `${ate} m`);
+  assert.match(await page.textContent(tid('vo-progress')), new RegExp(`frame ${n} / ${n}`));
+  metrics.voChromium = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s/)?.[0];
+  // The lab's window as a PNG: the same bytes the CLI writes.
+  const [download] = await Promise.all([page.waitForEvent('download'), page.click(tid('vo-download'))]);
+  const png = fs.readFileSync(await download.path());
+  assert.ok(png.equals(fs.readFileSync(path.join(tmp, 'trajectory.png'))), 'trajectory.png differs from the CLI');
+  await page.locator('.trajectory').screenshot({ path: path.join(SHOTS, 'trajectory.png') });
+  fs.rmSync(tmp, { recursive: true });
 });

@@ -7,6 +7,7 @@ mod explain;
 mod frames;
 mod load;
 mod result;
+mod trajectory;
 
 pub use check::{Exercises, SelfCheck};
 pub use controls::Controls;
@@ -14,6 +15,7 @@ pub use explain::{DescriptorGrid, DistanceChart, Explanation};
 pub use frames::FramesView;
 pub use load::{Loader, Status};
 pub use result::ResultPanel;
+pub use trajectory::TrajectoryView;
 
 use crate::loading;
 use crate::state::{Lab, Source};
@@ -46,6 +48,7 @@ pub fn Explorer(lab: Lab) -> impl IntoView {
                     <Exercises/>
                 </div>
             </div>
+            <TrajectoryView/>
         </main>
         <footer>
             <p>

@@ -1,0 +1,192 @@
+//! The lab's `view_trajectory`: monocular visual odometry over frames 0…N−1 of
+//! the demo or a MyKITTI folder, computed by the core in a worker, drawn as it
+//! grows (truth green, estimate red, as in the lab's window), with the
+//! trajectory error and the lab's window as a PNG to download.
+
+use crate::client;
+use crate::loading;
+use crate::msg::FromWorker;
+use crate::state::{Lab, Source};
+use leptos::prelude::*;
+use siftlab_core::render::trajectory::coordinates_text;
+
+type P3 = [f64; 3];
+
+fn blob_url(bytes: &[u8]) -> Option<String> {
+    let parts = js_sys::Array::new();
+    parts.push(&js_sys::Uint8Array::from(bytes));
+    let blob = web_sys::Blob::new_with_u8_array_sequence(&parts).ok()?;
+    web_sys::Url::create_object_url_with_blob(&blob).ok()
+}
+
+fn revoke(url: Option<String>) {
+    if let Some(u) = url {
+        let _ = web_sys::Url::revoke_object_url(&u);
+    }
+}
+
+/// Consecutive frames from 0 in the source (what the loop can run over).
+fn run_length(s: &Source) -> u32 {
+    let f = s.frames();
+    (0..).take_while(|i| f.contains(i)).count() as u32
+}
+
+#[derive(Clone, Debug, PartialEq)]
+struct Done {
+    ate: f64,
+    png_url: Option<String>,
+    ms: f64,
+}
+
+#[component]
+pub fn TrajectoryView() -> impl IntoView {
+    let lab = expect_context::<Lab>();
+    let n_text = RwSignal::new(String::new());
+    let steps = RwSignal::new(Vec::<(u32, P3, Option<P3>)>::new());
+    let total = RwSignal::new(0u32);
+    let running = RwSignal::new(false);
+    let error = RwSignal::new(None::<String>);
+    let done = RwSignal::new(None::<Done>);
+    let frame_url = RwSignal::new(None::<String>);
+    let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
+    let available = move || lab.source.with(run_length);
+    Effect::new(move |_| n_text.set(available().to_string()));
+
+    let run = move |_| {
+        let n = match n_text.get_untracked().trim().parse::<u32>() {
+            Ok(n) if n >= 2 => n,
+            _ => {
+                error.set(Some("give a number of frames ≥ 2".into()));
+                return;
+            }
+        };
+        error.set(None);
+        if let Some(d) = done.get_untracked() {
+            revoke(d.png_url);
+        }
+        done.set(None);
+        steps.set(vec![]);
+        total.set(n);
+        running.set(true);
+        let source = lab.source.get_untracked();
+        leptos::task::spawn_local(async move {
+            let (fr, poses) = match loading::vo_inputs(&source, n).await {
+                Ok(x) => x,
+                Err(e) => {
+                    error.set(Some(e));
+                    running.set(false);
+                    return;
+                }
+            };
+            frames.set_value(fr.clone());
+            let started = client::run_vo(fr, poses, move |m| match m {
+                FromWorker::VoStep { frame, position, truth, .. } => {
+                    steps.update(|s| s.push((frame, position, truth)));
+                    let url = frames.with_value(|f| f.get(frame as usize).and_then(|b| blob_url(b)));
+                    revoke(frame_url.get_untracked());
+                    frame_url.set(url);
+                }
+                FromWorker::VoDone { ate, png, ms, .. } => {
+                    done.set(Some(Done { ate, png_url: blob_url(&png), ms }));
+                    running.set(false);
+                }
+                FromWorker::Failed { message, .. } => {
+                    error.set(Some(message));
+                    running.set(false);
+                }
+                _ => {}
+            });
+            if let Err(e) = started {
+                error.set(Some(e));
+                running.set(false);
+            }
+        });
+    };
+    let stop = move |_| {
+        client::stop_vo();
+        running.set(false);
+    };
+
+    let plot = move || {
+        let s = steps.get();
+        if s.is_empty() {
+            return None;
+        }
+        // The lab's window: x to the right, z (forward) downwards; fit all points.
+        let pts: Vec<P3> = s.iter().flat_map(|(_, e, t)| std::iter::once(*e).chain(*t)).collect();
+        let (mut x0, mut x1, mut z0, mut z1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for p in &pts {
+            if p[0].is_finite() && p[2].is_finite() {
+                x0 = x0.min(p[0]);
+                x1 = x1.max(p[0]);
+                z0 = z0.min(p[2]);
+                z1 = z1.max(p[2]);
+            }
+        }
+        let span = (x1 - x0).max(z1 - z0).max(1.0);
+        let pad = span * 0.08;
+        let (vx, vz, vs) = ((x0 + x1) / 2.0 - span / 2.0 - pad, (z0 + z1) / 2.0 - span / 2.0 - pad, span + 2.0 * pad);
+        let line = |f: &dyn Fn(&(u32, P3, Option<P3>)) -> Option<P3>| {
+            s.iter().filter_map(f).filter(|p| p[0].is_finite() && p[2].is_finite()).map(|p| format!("{:.3},{:.3}", p[0], p[2])).collect::<Vec<_>>().join(" ")
+        };
+        let est = line(&|(_, e, _)| Some(*e));
+        let gt = line(&|(_, _, t)| *t);
+        let last = s.last().map(|(_, e, _)| *e).unwrap_or([0.0; 3]);
+        let r = vs / 120.0;
+        Some(view! {
+            <svg class="traj-svg" viewBox=format!("{vx} {vz} {vs} {vs}") data-testid="vo-plot" role="img" aria-label="trajectory: truth green, estimate red">
+                <polyline points=gt class="traj-gt" stroke-width=r * 0.8/>
+                <polyline points=est class="traj-est" stroke-width=r * 0.8/>
+                <circle cx=last[0] cy=last[2] r=r * 1.6 class="traj-now"/>
+            </svg>
+            <p class="muted small">"x → right, z (forward) ↓ as in the lab's window; dot: the camera now"</p>
+            <p class="mono small" data-testid="vo-coordinates">{coordinates_text(&last)}</p>
+        })
+    };
+
+    view! {
+        <section class="card trajectory" aria-label="Visual odometry">
+            <h2>"8 · Visual odometry (the lab's view_trajectory)"</h2>
+            <p class="muted">
+                "The lab's monocular VO on frames 0 … N−1: SIFT keypoints of the first frame, Lucas–Kanade tracking, "
+                "essential matrix (5-point RANSAC), recoverPose, scale from the ground-truth poses. "
+                <span class="legend-gt">"green: ground truth"</span>", "<span class="legend-est">"red: estimate"</span>"."
+            </p>
+            <div class="control-row">
+                <label class="ctl">
+                    <span>"Frames (N) " <span class="muted">{move || format!("{} available from 0", available())}</span></span>
+                    <input type="number" min="2" class="num" data-testid="vo-frames"
+                        prop:value=move || n_text.get()
+                        on:input=move |ev| n_text.set(event_target_value(&ev))/>
+                </label>
+                <button class="primary" data-testid="vo-run" on:click=run prop:disabled=move || running.get() || available() < 2>
+                    "Run the odometry"
+                </button>
+                <Show when=move || running.get()>
+                    <button on:click=stop>"Stop"</button>
+                </Show>
+            </div>
+            {move || error.get().map(|e| view! { <p class="error" data-testid="vo-error" role="alert">{e}</p> })}
+            <Show when=move || running.get() || !steps.with(|s| s.is_empty())>
+                <div class="vo-progress" data-testid="vo-progress">
+                    <div class="pbar"><div class="pbar-fill" style:width=move || format!("{:.1}%", 100.0 * steps.with(|s| s.len()) as f64 / total.get().max(1) as f64)></div></div>
+                    <span class="muted">{move || format!("frame {} / {}", steps.with(|s| s.len()), total.get())}</span>
+                </div>
+                <div class="vo-views">
+                    <div class="vo-plot">{plot}</div>
+                    <div class="vo-frame">
+                        {move || frame_url.get().map(|u| view! { <img src=u alt="the current camera frame" class="vo-img"/> })}
+                    </div>
+                </div>
+            </Show>
+            {move || done.get().map(|d| view! {
+                <p>
+                    "Trajectory error (RMSE, no alignment, GT scale): "
+                    <strong data-testid="vo-ate">{format!("{:.4} m", d.ate)}</strong>
+                    {format!(" over {} frames · {:.1} s", steps.with(|s| s.len()), d.ms / 1000.0)}
+                    {d.png_url.map(|u| view! { " · " <a href=u download="trajectory.png" data-testid="vo-download">"download trajectory.png"</a> })}
+                </p>
+            })}
+        </section>
+    }
+}
