@@ -80,7 +80,9 @@ fn cv_round(v: f64) -> i64 {
 
 /// OpenCV's `SinTable` for 0..=90 degrees: sin rounded to 7 decimals, as
 /// float literals (these, not libm's sin, decide where circle vertices land).
+// The literals are OpenCV's table text; each parses to the same f32 it does.
 #[rustfmt::skip]
+#[allow(clippy::excessive_precision, clippy::approx_constant)]
 const SIN_QUADRANT: [f32; 91] = [0.0000000, 0.0174524, 0.0348995, 0.0523360, 0.0697565, 0.0871557, 0.1045285, 0.1218693, 0.1391731, 0.1564345, 0.1736482, 0.1908090, 0.2079117, 0.2249511, 0.2419219, 0.2588190, 0.2756374, 0.2923717, 0.3090170, 0.3255682, 0.3420201, 0.3583679, 0.3746066, 0.3907311, 0.4067366, 0.4226183, 0.4383711, 0.4539905, 0.4694716, 0.4848096, 0.5000000, 0.5150381, 0.5299193, 0.5446390, 0.5591929, 0.5735764, 0.5877853, 0.6018150, 0.6156615, 0.6293204, 0.6427876, 0.6560590, 0.6691306, 0.6819984, 0.6946584, 0.7071068, 0.7193398, 0.7313537, 0.7431448, 0.7547096, 0.7660444, 0.7771460, 0.7880108, 0.7986355, 0.8090170, 0.8191520, 0.8290376, 0.8386706, 0.8480481, 0.8571673, 0.8660254, 0.8746197, 0.8829476, 0.8910065, 0.8987940, 0.9063078, 0.9135455, 0.9205049, 0.9271839, 0.9335804, 0.9396926, 0.9455186, 0.9510565, 0.9563048, 0.9612617, 0.9659258, 0.9702957, 0.9743701, 0.9781476, 0.9816272, 0.9848078, 0.9876883, 0.9902681, 0.9925462, 0.9945219, 0.9961947, 0.9975641, 0.9986295, 0.9993908, 0.9998477, 1.0000000];
 
 /// `SinTable[i]` for 0 <= i <= 450 (the table repeats the first quadrant at
@@ -226,10 +228,10 @@ pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
         let t2 = (j | 4) * slope;
         ep[0] = 0;
         ep[8] = slope;
-        ep[1] = ((((j - i) & 0x78) | 4) * slope >> 8) & 0x1ff;
+        ep[1] = (((((j - i) & 0x78) | 4) * slope) >> 8) & 0x1ff;
         ep[3] = ep[1];
         ep[2] = (t1 >> 8) & 0x1ff;
-        ep[4] = ((((j - i) + 0x80) | 4) * slope >> 8) & 0x1ff;
+        ep[4] = (((((j - i) + 0x80) | 4) * slope) >> 8) & 0x1ff;
         ep[5] = ((t1 + t0) >> 8) & 0x1ff;
         ep[6] = (t2 >> 8) & 0x1ff;
         ep[7] = ((t2 + t0) >> 8) & 0x1ff;
@@ -242,9 +244,9 @@ pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
             let y = (pt1.1 >> XY_SHIFT) - 1;
             let ep_corr = ep[(sel(scount) * 3 + sel(ecount)) as usize];
             let dist = ((pt1.1 >> (XY_SHIFT - 5)) & 31) as usize;
-            blend_aa(img, x, y, c, (ep_corr * FILTER[dist + 32] >> 8) & 0xff);
-            blend_aa(img, x, y + 1, c, (ep_corr * FILTER[dist] >> 8) & 0xff);
-            blend_aa(img, x, y + 2, c, (ep_corr * FILTER[63 - dist] >> 8) & 0xff);
+            blend_aa(img, x, y, c, ((ep_corr * FILTER[dist + 32]) >> 8) & 0xff);
+            blend_aa(img, x, y + 1, c, ((ep_corr * FILTER[dist]) >> 8) & 0xff);
+            blend_aa(img, x, y + 2, c, ((ep_corr * FILTER[63 - dist]) >> 8) & 0xff);
             pt1.1 += y_step;
             x += 1;
             scount += 1;
@@ -256,9 +258,9 @@ pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
             let x = (pt1.0 >> XY_SHIFT) - 1;
             let ep_corr = ep[(sel(scount) * 3 + sel(ecount)) as usize];
             let dist = ((pt1.0 >> (XY_SHIFT - 5)) & 31) as usize;
-            blend_aa(img, x, y, c, (ep_corr * FILTER[dist + 32] >> 8) & 0xff);
-            blend_aa(img, x + 1, y, c, (ep_corr * FILTER[dist] >> 8) & 0xff);
-            blend_aa(img, x + 2, y, c, (ep_corr * FILTER[63 - dist] >> 8) & 0xff);
+            blend_aa(img, x, y, c, ((ep_corr * FILTER[dist + 32]) >> 8) & 0xff);
+            blend_aa(img, x + 1, y, c, ((ep_corr * FILTER[dist]) >> 8) & 0xff);
+            blend_aa(img, x + 2, y, c, ((ep_corr * FILTER[63 - dist]) >> 8) & 0xff);
             pt1.0 += x_step;
             y += 1;
             scount += 1;
@@ -429,6 +431,7 @@ fn fill_convex_poly(img: &mut RgbImage, v: &[(i64, i64)], c: Rgb<u8>, aa: bool, 
 /// LineAA, or a LINE_8 line; thicker: a filled quad of half-width
 /// thickness/2 plus round caps on the ends selected by `flags` (bit 0:
 /// start, bit 1: end).
+#[allow(clippy::too_many_arguments)] // OpenCV's ThickLine signature, kept for traceability
 fn thick_line(img: &mut RgbImage, p0: (i64, i64), p1: (i64, i64), c: Rgb<u8>, thickness: i64, aa: bool, flags: u32, shift: u32) {
     let up = XY_SHIFT - shift;
     let mut p0 = (p0.0 << up, p0.1 << up);

@@ -32,10 +32,9 @@ pub fn highlight(frame: &GrayImage, points: &[(i64, i64)]) -> RgbImage {
 /// Frames of different heights (the lab's hconcat would throw) are padded
 /// with black at the bottom.
 pub fn info_frames(prev_image: &GrayImage, cur_image: &GrayImage, info: &MatchInfo) -> RgbImage {
-    let (prev_pts, cur_pts): (Vec<(i64, i64)>, &[(i64, i64)]) =
-        if info.points.is_empty() { (vec![], &[]) } else { (vec![info.query], &info.points) };
-    let a = highlight(prev_image, &prev_pts);
-    let b = highlight(cur_image, cur_pts);
+    let any = !info.points.is_empty();
+    let a = highlight(prev_image, if any { std::slice::from_ref(&info.query) } else { &[] });
+    let b = highlight(cur_image, &info.points);
     let mut out = RgbImage::new(a.width() + b.width(), a.height().max(b.height()));
     image::imageops::replace(&mut out, &a, 0, 0);
     image::imageops::replace(&mut out, &b, a.width() as i64, 0);
