@@ -1,0 +1,123 @@
+#!/usr/bin/env python3
+"""siftlab's visual odometry against the lab's OpenCV 4.8 pipeline, in the same run.
+
+    python3 tests/scripts/compare_vo.py [--dataset DIR] [--frames N] [--repeat K] [--json]
+
+Runs tests/scripts/vo_reference.py's loop (in this process) and
+`target/release/siftlab -d DIR view_trajectory N --save-poses ...` (a subprocess; build it first
+with `cargo build --release --bin siftlab`), alternating K times, and reports for both:
+the absolute trajectory error (RMSE of the position differences to the ground truth, no
+alignment, GT scale as the lab uses it), the frame-by-frame distance between the two estimates
+(max / median / at the last frame), and frames per second (best of K, whole loop with image
+reading; ours includes process start-up) with the ratio ours / OpenCV.
+
+The dataset defaults to ../shared/data/MyKITTI when it exists, else target/synthkitti
+(generate it with tests/scripts/gen_synthkitti.py --out target/synthkitti).
+Requires opencv-contrib-python-headless==4.8.0.76 and numpy<2.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import vo_reference as ref  # noqa: E402
+
+REPO = ref.REPO
+
+
+def read_positions(path):
+    out = []
+    with open(path) as f:
+        for line in f:
+            v = [float(x) for x in line.split()]
+            if len(v) != 12:
+                raise SystemExit("%s: expected 12 numbers a line, got %d" % (path, len(v)))
+            out.append((v[3], v[7], v[11]))
+    return out
+
+
+def dist(a, b):
+    return sum((x - y) ** 2 for x, y in zip(a, b)) ** 0.5
+
+
+def run_ours(binary, dataset, frames, tmp):
+    poses = os.path.join(tmp, "ours_poses.txt")
+    png = os.path.join(tmp, "trajectory.png")
+    cmd = [binary, "-d", dataset, "view_trajectory", str(frames), "--save-poses", poses, "--output", png]
+    start = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    elapsed = time.perf_counter() - start
+    if proc.returncode != 0:
+        raise SystemExit("siftlab failed (%d): %s" % (proc.returncode, proc.stderr.strip()[-2000:]))
+    return read_positions(poses), elapsed, proc.stdout.strip()
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--dataset", default=None)
+    ap.add_argument("--frames", type=int, default=None, help="frames from 0 (default: all)")
+    ap.add_argument("--repeat", type=int, default=1, help="alternate both pipelines K times, keep the best time")
+    ap.add_argument("--binary", default=os.path.join(REPO, "target", "release", "siftlab"))
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+
+    dataset = os.path.abspath(args.dataset or ref.default_dataset())
+    available = min(ref.count_frames(dataset), len(ref.read_poses(dataset)))
+    frames = args.frames if args.frames is not None else available
+    if frames < 2 or frames > available:
+        raise SystemExit("need 2..%d frames, got %d (dataset %s)" % (available, frames, dataset))
+    if not os.path.isfile(args.binary):
+        raise SystemExit("%s not found: run `cargo build --release --bin siftlab` first" % args.binary)
+
+    gt = [ref.gt_position(p) for p in ref.read_poses(dataset)[:frames]]
+    t_cv, t_ours = [], []
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(max(1, args.repeat)):
+            start = time.perf_counter()
+            cv_pos, _rot, _ = ref.run(dataset, frames)
+            t_cv.append(time.perf_counter() - start)
+            our_pos, elapsed, our_text = run_ours(args.binary, dataset, frames, tmp)
+            t_ours.append(elapsed)
+
+    diffs = [dist(a, b) for a, b in zip(our_pos, cv_pos)]
+    res = {
+        "dataset": dataset,
+        "frames": frames,
+        "ate_rmse_ours": ref.ate_rmse(our_pos, gt),
+        "ate_rmse_opencv": ref.ate_rmse(cv_pos, gt),
+        "diff_max": max(diffs),
+        "diff_median": statistics.median(diffs),
+        "diff_last": diffs[-1],
+        "final_ours": our_pos[-1],
+        "final_opencv": cv_pos[-1],
+        "final_gt": gt[-1],
+        "fps_ours": frames / min(t_ours),
+        "fps_opencv": frames / min(t_cv),
+        "seconds_ours": t_ours,
+        "seconds_opencv": t_cv,
+        "cpus": os.cpu_count(),
+    }
+    res["fps_ratio"] = res["fps_ours"] / res["fps_opencv"]
+    if args.json:
+        print(json.dumps(res))
+        return
+    print("dataset %s, frames 0..%d" % (dataset, frames - 1))
+    print("ATE RMSE (no alignment, GT scale): siftlab %.6f m, OpenCV %.6f m" % (res["ate_rmse_ours"], res["ate_rmse_opencv"]))
+    print("siftlab vs OpenCV, per-frame position difference: max %.3e m, median %.3e m, last frame %.3e m"
+          % (res["diff_max"], res["diff_median"], res["diff_last"]))
+    print("final position: siftlab (%.4f, %.4f, %.4f), OpenCV (%.4f, %.4f, %.4f), truth (%.4f, %.4f, %.4f)"
+          % (*res["final_ours"], *res["final_opencv"], *res["final_gt"]))
+    print("speed (best of %d): siftlab %.2f frames/s, OpenCV %.2f frames/s, ratio %.2fx"
+          % (len(t_ours), res["fps_ours"], res["fps_opencv"], res["fps_ratio"]))
+
+
+if __name__ == "__main__":
+    main()
