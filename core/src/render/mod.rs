@@ -1,11 +1,17 @@
 //! The images the lab's commands draw, reproduced with the `image` crate only:
 //! `cv2.drawMatchesKnn(..., flags=2)` for `view_feature` ([`matches`]), the
 //! `view_info` composite ([`info`]) and the `view_trajectory` window
-//! ([`trajectory`]). The primitives in [`draw`] follow OpenCV 4.8's
-//! `imgproc/drawing.cpp` integer arithmetic (LINE_AA lines with 4 fractional
-//! bits, LINE_8 circles, polygon fill) so the PNGs match the lab's pixel for
-//! pixel; text uses a built-in 5x7 bitmap font ([`font`]) instead of OpenCV's
-//! Hershey strokes. Everything here is plain Rust and runs on wasm too.
+//! ([`trajectory`]). Everything here is plain Rust and runs on wasm too.
+//!
+//! The primitives in [`draw`] follow OpenCV 4.8's `imgproc/drawing.cpp`
+//! integer arithmetic, with the line type each lab call uses:
+//! `drawMatchesKnn` draws its keypoint circles (radius 3) and match lines
+//! with **LINE_AA** and 4 fractional bits (`draw_shift_bits`), colours from
+//! `cv::theRNG()`; the lab's `view_info` circles (radius 10, thickness 2) and
+//! the trajectory dots (radius 1) are `cv2.circle`'s default **LINE_8**.
+//! `view_feature` and `view_info` PNGs equal OpenCV's pixel for pixel
+//! (`testdata/compare_visual.py`). Only text differs: a built-in 5x7 bitmap
+//! font ([`font`]) replaces OpenCV's Hershey strokes.
 
 pub mod draw;
 pub mod font;

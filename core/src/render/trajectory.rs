@@ -107,6 +107,11 @@ pub fn caption(img: &mut RgbImage, current: &[f64; 3], style: &Style) {
 /// `estimate[i]` in red then the truth `truth[i]` in green; the caption shows
 /// the last estimate (or the origin when there is none). The slices may have
 /// different lengths; each is drawn as far as it goes.
+///
+/// To reproduce the lab's window exactly, pass what `showDrive` plotted: its
+/// truth is (0, 0, 0) for frames 0 and 1 (`trueX..` are only set by the
+/// scale lookup from frame 2) and its estimate at frame 1 is already the
+/// unscaled unit translation.
 pub fn draw(truth: &[[f64; 3]], estimate: &[[f64; 3]], style: &Style) -> RgbImage {
     let mut img = RgbImage::new(style.width.max(1), style.height.max(1));
     for i in 0..truth.len().max(estimate.len()) {
