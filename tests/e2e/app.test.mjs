@@ -330,3 +330,18 @@ test('visual odometry on the demo frames equals the CLI view_trajectory', async 
   await page.locator('.trajectory').screenshot({ path: path.join(SHOTS, 'trajectory.png') });
   fs.rmSync(tmp, { recursive: true });
 });
+
+test('view_feature and view_info exports equal the CLI PNGs byte for byte', async () => {
+  await page.goto(`${BASE}?lanes=${LANES}&algo=dt&t=280&feature=42`);
+  await idle();
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-png-'));
+  for (const [cmd, id, file] of [['view_feature', 'export-feature', 'opencv_visual.png'], ['view_info', 'export-info', 'custom_visual.png']]) {
+    execFileSync(CLI, ['-d', path.join(ROOT, DATASET), cmd, '-a', 'dt', '-t', '280', '1', '42'], { cwd: tmp, encoding: 'utf8' });
+    const [download] = await Promise.all([page.waitForEvent('download'), page.click(tid(id))]);
+    assert.equal(download.suggestedFilename(), file);
+    const png = fs.readFileSync(await download.path());
+    assert.ok(png.equals(fs.readFileSync(path.join(tmp, file))), `${file} differs from the CLI's`);
+    fs.copyFileSync(await download.path(), path.join(SHOTS, `export-${file}`));
+  }
+  fs.rmSync(tmp, { recursive: true });
+});
