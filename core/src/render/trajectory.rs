@@ -195,12 +195,11 @@ mod tests {
 }
 
 #[cfg(test)]
-mod demo {
-    /// Writes /tmp/siftlab_traj_demo.png from the fixture poses (run with
-    /// `--ignored` to look at the window).
-    #[test]
-    #[ignore]
-    fn write_demo_png() {
+mod lab_reference {
+    use super::*;
+
+    /// Fixture truth and gen_refs.py traj()'s made-up estimate.
+    fn paths() -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
         let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/mykitti/poses/00.txt")).unwrap();
         let truth: Vec<[f64; 3]> = text
             .lines()
@@ -209,8 +208,36 @@ mod demo {
                 [v[3], v[7], v[11]]
             })
             .collect();
-        let est: Vec<[f64; 3]> = truth.iter().enumerate().map(|(i, p)| [p[0] * 0.9 - i as f64 * 0.05, p[1], p[2] * 0.97]).collect();
-        let img = super::draw(&truth, &est, &super::Style::default());
+        let est = truth.iter().enumerate().map(|(i, p)| [p[0] * 0.9 - i as f64 * 0.05, p[1], p[2] * 0.97]).collect();
+        (truth, est)
+    }
+
+    #[test]
+    fn window_equals_the_labs_outside_the_caption() {
+        let (truth, est) = paths();
+        let img = draw(&truth, &est, &Style::default());
+        let want = image::open(concat!(env!("CARGO_MANIFEST_DIR"), "/src/render/testdata/trajectory_lab.png")).unwrap().to_rgb8();
+        assert_eq!(img.dimensions(), want.dimensions());
+        let mut dots = 0;
+        for (x, y, p) in img.enumerate_pixels() {
+            if (20..=60).contains(&y) && x >= 10 {
+                continue; // caption band: Hershey text there, 5x7 bitmap here
+            }
+            assert_eq!(p.0, want.get_pixel(x, y).0, "pixel ({x}, {y})");
+            dots += (p.0 != [0, 0, 0]) as usize;
+        }
+        assert!(dots > 300, "{dots} coloured pixels: both paths drawn");
+        // The caption: same band, same text width class, white pixels only inside it.
+        let white = |im: &RgbImage| im.enumerate_pixels().filter(|(_, y, p)| (20..=60).contains(y) && p.0 == [255; 3]).count();
+        assert!(white(&img) > 150 && white(&want) > 150);
+    }
+
+    /// Writes /tmp/siftlab_traj_demo.png (run with `--ignored` to look at it).
+    #[test]
+    #[ignore]
+    fn write_demo_png() {
+        let (truth, est) = paths();
+        let img = draw(&truth, &est, &Style::fitted(&truth, &est));
         std::fs::write("/tmp/siftlab_traj_demo.png", super::super::encode_png(&img).unwrap()).unwrap();
     }
 }

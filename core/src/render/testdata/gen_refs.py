@@ -52,10 +52,30 @@ def prims():
     cv2.imwrite(os.path.join(HERE, "circles_thick2.png"), img)
 
 
+def traj():
+    """The lab's showDrive loop (truth from the fixture poses, a made-up
+    estimate) on its 600x600 canvas; the caption text is Hershey, which the
+    Rust side does not reproduce, so tests skip the band rows 20..60."""
+    poses = os.path.join(HERE, "..", "..", "..", "..", "tests", "fixtures", "mykitti", "poses", "00.txt")
+    traj = np.zeros((600, 600, 3), dtype=np.uint8)
+    for i, line in enumerate(open(poses)):
+        v = [float(s) for s in line.split()]
+        tx, tz = v[3], v[11]
+        x, y, z = tx * 0.9 - i * 0.05, v[7], tz * 0.97
+        draw_x, draw_y = int(x) + 290, int(z) + 90
+        true_x, true_y = int(tx) + 290, int(tz) + 90
+        cv2.circle(traj, (draw_x, draw_y), 1, (0, 0, 255), 1)
+        cv2.circle(traj, (true_x, true_y), 1, (0, 255, 0), 1)
+        cv2.rectangle(traj, (10, 20), (600, 60), (0, 0, 0), -1)
+        text = "Coordinates: x=%2fm y=%2fm z=%2fm" % (x, y, z)
+        cv2.putText(traj, text, (20, 40), cv2.FONT_HERSHEY_PLAIN, 1, (255, 255, 255), 1, 8)
+    cv2.imwrite(os.path.join(HERE, "trajectory_lab.png"), traj)
+
+
 if __name__ == "__main__":
     if len(sys.argv) > 1:
-        {"knn": knn, "prims": prims}[sys.argv[1]]()
+        {"knn": knn, "prims": prims, "traj": traj}[sys.argv[1]]()
     else:
         assert cv2.__version__ == "4.8.0", cv2.__version__
-        for what in ("knn", "prims"):
+        for what in ("knn", "prims", "traj"):
             subprocess.run([sys.executable, os.path.abspath(__file__), what], check=True)
