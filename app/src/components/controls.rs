@@ -118,11 +118,14 @@ pub fn Controls() -> impl IntoView {
                     {move || {
                         let t = lab.threshold();
                         let t = t.trim();
+                        let frame = match lab.source.get() {
+                            crate::state::Source::Files => "FRAME_ID".to_string(),
+                            _ => lab.frame_id.get().to_string(),
+                        };
                         format!(
-                            "siftlab get_info -a {}{} {} {}",
+                            "siftlab get_info -a {}{} {frame} {}",
                             lab.algo.get(),
                             if t.is_empty() { String::new() } else { format!(" -t {t}") },
-                            lab.frame_id.get(),
                             lab.feature_text.get().trim()
                         )
                     }}
