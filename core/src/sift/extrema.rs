@@ -231,7 +231,7 @@ fn adjust_local_extremum(
         x: (c as f32 + xc) * scale,
         y: (r as f32 + xr) * scale,
         octave: o as i32 + ((layer as i32) << 8) + (rne64((xi as f64 + 0.5) * 255.0) << 16),
-        size: ((p.sigma as f32) * 2f32.powf((layer as f32 + xi) / nl as f32)) * scale * 2.0,
+        size: ((p.sigma as f32) * super::num::pow2f((layer as f32 + xi) / nl as f32)) * scale * 2.0,
         response: contr.abs(),
         angle: 0.0,
     };
