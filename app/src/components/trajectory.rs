@@ -11,6 +11,8 @@ use leptos::prelude::*;
 use siftlab_core::render::trajectory::coordinates_text;
 
 type P3 = [f64; 3];
+/// One plotted step: frame, estimate, ground truth.
+type Step = (u32, P3, Option<P3>);
 
 fn blob_url(bytes: &[u8]) -> Option<String> {
     let parts = js_sys::Array::new();
@@ -42,7 +44,7 @@ struct Done {
 pub fn TrajectoryView() -> impl IntoView {
     let lab = expect_context::<Lab>();
     let n_text = RwSignal::new(String::new());
-    let steps = RwSignal::new(Vec::<(u32, P3, Option<P3>)>::new());
+    let steps = RwSignal::new(Vec::<Step>::new());
     let total = RwSignal::new(0u32);
     let running = RwSignal::new(false);
     let error = RwSignal::new(None::<String>);
@@ -126,7 +128,7 @@ pub fn TrajectoryView() -> impl IntoView {
         let span = (x1 - x0).max(z1 - z0).max(1.0);
         let pad = span * 0.08;
         let (vx, vz, vs) = ((x0 + x1) / 2.0 - span / 2.0 - pad, (z0 + z1) / 2.0 - span / 2.0 - pad, span + 2.0 * pad);
-        let line = |f: &dyn Fn(&(u32, P3, Option<P3>)) -> Option<P3>| {
+        let line = |f: &dyn Fn(&Step) -> Option<P3>| {
             s.iter().filter_map(f).filter(|p| p[0].is_finite() && p[2].is_finite()).map(|p| format!("{:.3},{:.3}", p[0], p[2])).collect::<Vec<_>>().join(" ")
         };
         let est = line(&|(_, e, _)| Some(*e));
