@@ -14,6 +14,13 @@ const PAD: usize = WIN;
 /// `(winSize - 1) * 0.5f`.
 const HALF_WIN: f32 = 10.0;
 const W_BITS: i32 = 14;
+/// Row length of a window buffer: 21 columns padded to three 8-lane blocks.
+const WS: usize = 24;
+/// Slack after every padded plane so 8-lane loads at the last window column
+/// stay inside the buffer.
+const SLACK: usize = 32;
+/// A 21×21 window (columns 21..23 are scratch, never summed).
+type Win = [[i32; WS]; WIN];
 /// `FLT_SCALE = 1.f / (1 << 20)`.
 const FLT_SCALE: f32 = 1.0 / (1u32 << 20) as f32;
 
@@ -125,7 +132,7 @@ impl Level {
     fn new(pixels: Vec<u8>, w: usize, h: usize) -> Self {
         let stride = w + 2 * PAD;
         let ph = h + 2 * PAD;
-        let mut padded = vec![0u8; stride * ph];
+        let mut padded = vec![0u8; stride * ph + SLACK];
         let xs: Vec<usize> =
             (0..stride).map(|x| reflect101(x as isize - PAD as isize, w)).collect();
         for py in 0..ph {
@@ -180,8 +187,8 @@ impl Deriv {
         let (w, h) = (level.w, level.h);
         let img = &level.pixels;
         let stride = w + 2 * PAD;
-        let mut ix = vec![0i16; stride * (h + 2 * PAD)];
-        let mut iy = vec![0i16; stride * (h + 2 * PAD)];
+        let mut ix = vec![0i16; stride * (h + 2 * PAD) + SLACK];
+        let mut iy = vec![0i16; stride * (h + 2 * PAD) + SLACK];
         let mut s = vec![0i32; w];
         let mut d = vec![0i32; w];
         for y in 0..h {
@@ -193,11 +200,18 @@ impl Deriv {
                 d[x] = dn[x] as i32 - up[x] as i32;
             }
             let row = (y + PAD) * stride + PAD;
-            for x in 0..w {
+            let (rx, ry) = (&mut ix[row..row + w], &mut iy[row..row + w]);
+            // Interior without index arithmetic (vectorizes), the two edge
+            // columns with reflect-101.
+            for x in 1..w.saturating_sub(1) {
+                rx[x] = (s[x + 1] - s[x - 1]) as i16;
+                ry[x] = (3 * d[x - 1] + 10 * d[x] + 3 * d[x + 1]) as i16;
+            }
+            for x in [0, w - 1] {
                 let l = reflect101(x as isize - 1, w);
                 let r = reflect101(x as isize + 1, w);
-                ix[row + x] = (s[r] - s[l]) as i16;
-                iy[row + x] = (3 * d[l] + 10 * d[x] + 3 * d[r]) as i16;
+                rx[x] = (s[r] - s[l]) as i16;
+                ry[x] = (3 * d[l] + 10 * d[x] + 3 * d[r]) as i16;
             }
         }
         Deriv { stride, ix, iy }
@@ -223,7 +237,7 @@ fn weights(a: f32, b: f32) -> [i32; 4] {
 /// Interpolates a 21×21 window of a padded u8 level at top-left `(ix, iy)`
 /// into values ×32 (`CV_DESCALE(..., W_BITS - 5)`).
 #[inline(always)]
-fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut [[i32; WIN]; WIN]) {
+fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win) {
     let stride = level.stride;
     let base = level.offset(ix, iy);
     for (y, row) in out.iter_mut().enumerate() {
@@ -240,7 +254,7 @@ fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut [[i32; W
 }
 
 #[inline(always)]
-fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut [[i32; WIN]; WIN]) {
+fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut Win) {
     for (y, row) in out.iter_mut().enumerate() {
         let r0 = &plane[base + y * stride..][..WIN + 1];
         let r1 = &plane[base + (y + 1) * stride..][..WIN + 1];
@@ -259,7 +273,7 @@ fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut
 /// 0..15 into four f32 lanes (column c → lane c mod 4, columns in increasing
 /// order), columns 16..20 into a scalar, then `S + ((L0 + L2) + (L1 + L3))`.
 #[inline(always)]
-fn tensor_sums(gx: &[[i32; WIN]; WIN], gy: &[[i32; WIN]; WIN]) -> (f32, f32, f32) {
+fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
     let (mut l11, mut l12, mut l22) = ([0f32; 4], [0f32; 4], [0f32; 4]);
     let (mut s11, mut s12, mut s22) = (0f32, 0f32, 0f32);
     for (rx, ry) in gx.iter().zip(gy) {
@@ -287,9 +301,9 @@ fn tensor_sums(gx: &[[i32; WIN]; WIN], gy: &[[i32; WIN]; WIN]) -> (f32, f32, f32
 /// x/y of columns B+2, B+3); columns 16..20 into two scalars.
 #[inline(always)]
 fn mismatch(
-    d: &[[i32; WIN]; WIN],
-    gx: &[[i32; WIN]; WIN],
-    gy: &[[i32; WIN]; WIN],
+    d: &Win,
+    gx: &Win,
+    gy: &Win,
 ) -> (f32, f32) {
     let mut pq = [0f32; 8];
     let (mut s1, mut s2) = (0f32, 0f32);
@@ -330,18 +344,206 @@ fn out_of_bounds(ix: i32, iy: i32, w: usize, h: usize) -> bool {
 /// One level for one point (LKTrackerInvoker::operator()). `next` holds the
 /// stored estimate, updated in place; `status`/`err` are only touched at
 /// level 0.
+/// The four window kernels; [`Scalar`] is the reference, `avx2::Avx2` the
+/// same arithmetic in 8-lane integer / 4-lane f32 vectors (identical bits:
+/// integer sums are exact and every f32 lane adds in the scalar order).
+trait Kernels {
+    fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win);
+    fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut Win);
+    fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32);
+    fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32);
+}
+
+struct Scalar;
+
+impl Kernels for Scalar {
+    #[inline(always)]
+    fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win) {
+        warp_window(level, ix, iy, w, out)
+    }
+    #[inline(always)]
+    fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut Win) {
+        warp_deriv(plane, stride, base, w, out)
+    }
+    #[inline(always)]
+    fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
+        tensor_sums(gx, gy)
+    }
+    #[inline(always)]
+    fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
+        mismatch(d, gx, gy)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod avx2 {
+    use super::{Kernels, Level, Win, FLT_SCALE, WIN};
+    use std::arch::x86_64::*;
+
+    pub struct Avx2;
+
+    /// 4-tap fixed-point interpolation of 24 columns (21 used) per row;
+    /// `$load(ptr)` widens 8 source elements to i32 lanes.
+    macro_rules! warp_fn {
+        ($name:ident, $t:ty, $shift:expr, $load:expr) => {
+            #[target_feature(enable = "avx2")]
+            #[inline]
+            unsafe fn $name(p: *const $t, stride: usize, w: &[i32; 4], out: &mut Win) {
+                let (w0, w1, w2, w3) = (
+                    _mm256_set1_epi32(w[0]),
+                    _mm256_set1_epi32(w[1]),
+                    _mm256_set1_epi32(w[2]),
+                    _mm256_set1_epi32(w[3]),
+                );
+                let round = _mm256_set1_epi32(1 << ($shift - 1));
+                for (y, row) in out.iter_mut().enumerate() {
+                    for blk in 0..3 {
+                        let x = y * stride + blk * 8;
+                        let a = _mm256_mullo_epi32($load(p.add(x)), w0);
+                        let b = _mm256_mullo_epi32($load(p.add(x + 1)), w1);
+                        let c = _mm256_mullo_epi32($load(p.add(x + stride)), w2);
+                        let d = _mm256_mullo_epi32($load(p.add(x + stride + 1)), w3);
+                        let v = _mm256_add_epi32(_mm256_add_epi32(a, b), _mm256_add_epi32(c, d));
+                        let v = _mm256_srai_epi32::<{ $shift }>(_mm256_add_epi32(v, round));
+                        _mm256_storeu_si256(row.as_mut_ptr().add(blk * 8) as *mut __m256i, v);
+                    }
+                }
+            }
+        };
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn load_u8(p: *const u8) -> __m256i {
+        _mm256_cvtepu8_epi32(_mm_loadl_epi64(p as *const __m128i))
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn load_i16(p: *const i16) -> __m256i {
+        _mm256_cvtepi16_epi32(_mm_loadu_si128(p as *const __m128i))
+    }
+
+    warp_fn!(warp_u8, u8, 9, load_u8);
+    warp_fn!(warp_i16, i16, 14, load_i16);
+
+    impl Kernels for Avx2 {
+        #[inline(always)]
+        fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win) {
+            let base = level.offset(ix, iy);
+            let src = &level.padded;
+            assert!(base + WIN * level.stride + 25 <= src.len());
+            let p = src[base..].as_ptr();
+            // SAFETY: only reached on AVX2 CPUs (run_job checks); every load
+            // reads 8 bytes inside `src` (asserted above).
+            unsafe { warp_u8(p, level.stride, w, out) }
+        }
+
+        #[inline(always)]
+        fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut Win) {
+            assert!(base + WIN * stride + 25 <= plane.len());
+            let p = plane[base..].as_ptr();
+            // SAFETY: as above; each load reads 8 i16 inside `plane`.
+            unsafe { warp_i16(p, stride, w, out) }
+        }
+
+        #[inline(always)]
+        fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
+            // SAFETY: AVX2 checked by run_job; loads stay inside the rows.
+            unsafe { tensor_sums(gx, gy) }
+        }
+
+        #[inline(always)]
+        fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
+            // SAFETY: as above.
+            unsafe { mismatch(d, gx, gy) }
+        }
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn ld(row: &[i32; super::WS], x: usize) -> __m256i {
+        _mm256_loadu_si256(row.as_ptr().add(x) as *const __m256i)
+    }
+
+    /// Adds 8 products as f32: lanes 0..3 then lanes 4..7 (columns c, c+4).
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn acc8(acc: __m128, prod: __m256i) -> __m128 {
+        let f = _mm256_cvtepi32_ps(prod);
+        _mm_add_ps(_mm_add_ps(acc, _mm256_castps256_ps128(f)), _mm256_extractf128_ps::<1>(f))
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn total(s: f32, l: __m128) -> f32 {
+        let mut v = [0f32; 4];
+        _mm_storeu_ps(v.as_mut_ptr(), l);
+        s + ((v[0] + v[2]) + (v[1] + v[3]))
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
+        let (mut l11, mut l12, mut l22) = (_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps());
+        let (mut s11, mut s12, mut s22) = (0f32, 0f32, 0f32);
+        for (rx, ry) in gx.iter().zip(gy) {
+            for x in [0usize, 8] {
+                let (vx, vy) = (ld(rx, x), ld(ry, x));
+                l11 = acc8(l11, _mm256_mullo_epi32(vx, vx));
+                l12 = acc8(l12, _mm256_mullo_epi32(vx, vy));
+                l22 = acc8(l22, _mm256_mullo_epi32(vy, vy));
+            }
+            for c in 16..WIN {
+                s11 += (rx[c] * rx[c]) as f32;
+                s12 += (rx[c] * ry[c]) as f32;
+                s22 += (ry[c] * ry[c]) as f32;
+            }
+        }
+        (total(s11, l11), total(s12, l12), total(s22, l22))
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
+        let (mut p, mut q) = (_mm_setzero_ps(), _mm_setzero_ps());
+        let (mut s1, mut s2) = (0f32, 0f32);
+        for y in 0..WIN {
+            let (dr, xr, yr) = (&d[y], &gx[y], &gy[y]);
+            for x in [0usize, 8] {
+                let dv = ld(dr, x);
+                let px = _mm256_mullo_epi32(dv, ld(xr, x));
+                let py = _mm256_mullo_epi32(dv, ld(yr, x));
+                // Columns c and c+4 summed as exact integers, then rounded.
+                let ux = _mm_cvtepi32_ps(_mm_add_epi32(_mm256_castsi256_si128(px), _mm256_extracti128_si256::<1>(px)));
+                let uy = _mm_cvtepi32_ps(_mm_add_epi32(_mm256_castsi256_si128(py), _mm256_extracti128_si256::<1>(py)));
+                p = _mm_add_ps(p, _mm_unpacklo_ps(ux, uy));
+                q = _mm_add_ps(q, _mm_unpackhi_ps(ux, uy));
+            }
+            for c in 16..WIN {
+                s1 += (dr[c] * xr[c]) as f32;
+                s2 += (dr[c] * yr[c]) as f32;
+            }
+        }
+        let t = _mm_add_ps(p, q);
+        let mut v = [0f32; 4];
+        _mm_storeu_ps(v.as_mut_ptr(), t);
+        ((s1 + (v[0] + v[2])) * FLT_SCALE, (s2 + (v[1] + v[3])) * FLT_SCALE)
+    }
+}
+
 /// Window buffers reused across points (every element is written before
 /// it is read).
 struct Scratch {
-    tmpl: [[i32; WIN]; WIN],
-    gx: [[i32; WIN]; WIN],
-    gy: [[i32; WIN]; WIN],
-    warped: [[i32; WIN]; WIN],
+    tmpl: Win,
+    gx: Win,
+    gy: Win,
+    warped: Win,
 }
 
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn track_point(
+fn track_point<K: Kernels>(
     prev: &Level,
     deriv: &Deriv,
     next_lvl: &Level,
@@ -371,12 +573,12 @@ fn track_point(
     }
     let wts = weights(q[0] - ix as f32, q[1] - iy as f32);
     let Scratch { tmpl, gx, gy, warped } = scratch;
-    warp_window(prev, ix, iy, &wts, tmpl);
+    K::warp_window(prev, ix, iy, &wts, tmpl);
     let dbase = deriv.offset(ix, iy);
-    warp_deriv(&deriv.ix, deriv.stride, dbase, &wts, gx);
-    warp_deriv(&deriv.iy, deriv.stride, dbase, &wts, gy);
+    K::warp_deriv(&deriv.ix, deriv.stride, dbase, &wts, gx);
+    K::warp_deriv(&deriv.iy, deriv.stride, dbase, &wts, gy);
 
-    let (s11, s12, s22) = tensor_sums(gx, gy);
+    let (s11, s12, s22) = K::tensor_sums(gx, gy);
     let (a11, a12, a22) = (s11 * FLT_SCALE, s12 * FLT_SCALE, s22 * FLT_SCALE);
     let det = a11 * a22 - a12 * a12;
     let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt())
@@ -401,13 +603,13 @@ fn track_point(
             break;
         }
         let w = weights(n[0] - jx as f32, n[1] - jy as f32);
-        warp_window(next_lvl, jx, jy, &w, warped);
+        K::warp_window(next_lvl, jx, jy, &w, warped);
         for (wr, tr) in warped.iter_mut().zip(tmpl.iter()) {
             for (v, t) in wr.iter_mut().zip(tr) {
                 *v -= t;
             }
         }
-        let (b1, b2) = mismatch(warped, gx, gy);
+        let (b1, b2) = K::mismatch(warped, gx, gy);
         let delta = [(a12 * b2 - a22 * b1) * dinv, (a12 * b1 - a11 * b2) * dinv];
         n = [n[0] + delta[0], n[1] + delta[1]];
         *next = [n[0] + HALF_WIN, n[1] + HALF_WIN];
@@ -433,10 +635,10 @@ fn track_point(
             return;
         }
         let w = weights(m[0] - jx as f32, m[1] - jy as f32);
-        warp_window(next_lvl, jx, jy, &w, warped);
+        K::warp_window(next_lvl, jx, jy, &w, warped);
         let mut errval = 0f32;
         for (wr, tr) in warped.iter().zip(tmpl.iter()) {
-            for (v, t) in wr.iter().zip(tr) {
+            for (v, t) in wr[..WIN].iter().zip(&tr[..WIN]) {
                 errval += (v - t).abs() as f32;
             }
         }
@@ -445,27 +647,29 @@ fn track_point(
 }
 
 struct Job<'a> {
-    prep: &'a Prepared,
+    prep: &'a Prepared<'a>,
     pts: &'a [[f32; 2]],
     range: std::ops::Range<usize>,
     max_level: usize,
     crit: (usize, f64),
     min_eig: f32,
+    /// Forces the scalar kernels (tests compare both paths).
+    scalar: bool,
 }
 
 #[inline(always)]
-fn run_job_body(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
+fn run_job_body<K: Kernels>(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
     let prep = job.prep;
     let mut scratch = Box::new(Scratch {
-        tmpl: [[0; WIN]; WIN],
-        gx: [[0; WIN]; WIN],
-        gy: [[0; WIN]; WIN],
-        warped: [[0; WIN]; WIN],
+        tmpl: [[0; WS]; WIN],
+        gx: [[0; WS]; WIN],
+        gy: [[0; WS]; WIN],
+        warped: [[0; WS]; WIN],
     });
     for level in (0..=job.max_level).rev() {
         let (pl, dl, nl) = (&prep.prev[level], &prep.derivs[level], &prep.next[level]);
         for (k, i) in job.range.clone().enumerate() {
-            track_point(
+            track_point::<K>(
                 pl, dl, nl, job.pts[i], &mut np[k], &mut st[k], &mut er[k], level, job.max_level,
                 job.crit, job.min_eig, &mut scratch,
             );
@@ -479,26 +683,58 @@ fn run_job_body(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32])
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn run_job_avx2(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
-    run_job_body(job, np, st, er)
+    run_job_body::<avx2::Avx2>(job, np, st, er)
 }
 
 fn run_job(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::is_x86_feature_detected!("avx2") {
+        if !job.scalar && std::is_x86_feature_detected!("avx2") {
             // SAFETY: the CPU supports AVX2 (checked just above).
             unsafe { run_job_avx2(job, np, st, er) };
             return;
         }
     }
-    run_job_body(job, np, st, er)
+    run_job_body::<Scalar>(job, np, st, er)
 }
 
 /// Pyramids and derivatives of a frame pair, built once per call.
-struct Prepared {
-    prev: Vec<Level>,
-    next: Vec<Level>,
+struct Prepared<'a> {
+    prev: &'a [Level],
+    next: &'a [Level],
     derivs: Vec<Deriv>,
+}
+
+/// An image pyramid as the tracker uses it; build it once per frame and pass
+/// it as `next` for one call and as `prev` for the following one.
+#[derive(Clone, Debug)]
+pub struct Pyramid {
+    levels: Vec<Level>,
+}
+
+impl Pyramid {
+    /// `buildOpticalFlowPyramid(img, (21, 21), max_level)`.
+    pub fn new(img: &GrayImage, max_level: usize) -> Pyramid {
+        Pyramid { levels: build_pyramid(img, max_level) }
+    }
+
+    pub fn size(&self) -> (usize, usize) {
+        (self.levels[0].w, self.levels[0].h)
+    }
+}
+
+/// calcOpticalFlowPyrLK on prebuilt pyramids (the previous one may be deeper;
+/// OpenCV limits the second pyramid to the first one's depth).
+pub fn calc_optical_flow_pyr_lk_pyramids(
+    prev: &Pyramid,
+    next: &Pyramid,
+    pts: &[[f32; 2]],
+    params: &LkParams,
+) -> LkResult {
+    let depth = prev.levels.len().min(next.levels.len()).min(params.max_level + 1);
+    let derivs = prev.levels[..depth].iter().map(Deriv::new).collect();
+    let prep = Prepared { prev: &prev.levels[..depth], next: &next.levels[..depth], derivs };
+    track_prepared(&prep, pts, params, false)
 }
 
 /// `cv2.calcOpticalFlowPyrLK(prev, next, pts, None, winSize=(21,21), ...)`.
@@ -513,11 +749,26 @@ pub fn calc_optical_flow_pyr_lk(
     let max_level = prev_pyr.len() - 1;
     let next_pyr = build_pyramid(next, max_level);
     let derivs = prev_pyr.iter().map(Deriv::new).collect();
-    let prep = Prepared { prev: prev_pyr, next: next_pyr, derivs };
-    track_prepared(&prep, pts, params)
+    let prep = Prepared { prev: &prev_pyr, next: &next_pyr, derivs };
+    track_prepared(&prep, pts, params, false)
 }
 
-fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams) -> LkResult {
+/// The same call with the portable kernels only (what wasm runs).
+pub fn calc_optical_flow_pyr_lk_portable(
+    prev: &GrayImage,
+    next: &GrayImage,
+    pts: &[[f32; 2]],
+    params: &LkParams,
+) -> LkResult {
+    let prev_pyr = build_pyramid(prev, params.max_level);
+    let max_level = prev_pyr.len() - 1;
+    let next_pyr = build_pyramid(next, max_level);
+    let derivs = prev_pyr.iter().map(Deriv::new).collect();
+    let prep = Prepared { prev: &prev_pyr, next: &next_pyr, derivs };
+    track_prepared(&prep, pts, params, true)
+}
+
+fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams, scalar: bool) -> LkResult {
     let max_level = prep.prev.len().min(prep.next.len()) - 1;
     let max_count = params.max_count.min(100);
     let eps = params.epsilon.clamp(0.0, 10.0);
@@ -531,7 +782,7 @@ fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams) -> LkRes
     // Points are independent (OpenCV runs them in parallel too, each result
     // written by one task), so splitting them over threads changes nothing.
     let run = |range: std::ops::Range<usize>, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]| {
-        let job = Job { prep, pts, range, max_level, crit, min_eig };
+        let job = Job { prep, pts, range, max_level, crit, min_eig, scalar };
         run_job(&job, np, st, er);
     };
 
@@ -743,6 +994,8 @@ mod tests {
         let next = GrayImage::decode(include_bytes!("testdata/lk_next.png")).unwrap();
         let pts: Vec<[f32; 2]> = LK_GOLDEN.iter().map(|g| g.0).collect();
         let out = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
+        // The portable kernels (wasm, CPUs without AVX2) give the same bits.
+        assert_eq!(calc_optical_flow_pyr_lk_portable(&prev, &next, &pts, &LkParams::default()), out);
         let mut exact = 0;
         for (i, g) in LK_GOLDEN.iter().enumerate() {
             let got = [out.next_pts[i][0].to_bits(), out.next_pts[i][1].to_bits()];

@@ -11,7 +11,7 @@
 //!           ref = cur
 //! ```
 
-use super::lk::{calc_optical_flow_pyr_lk, LkParams};
+use super::lk::{calc_optical_flow_pyr_lk_pyramids, LkParams, Pyramid};
 use super::ransac::{find_essential_mat, RansacParams};
 use super::recover_pose::recover_pose;
 use super::{mat_mul, mat_vec, Camera, Mat3, Vec3, IDENTITY};
@@ -63,7 +63,9 @@ pub struct Odometry {
     pub min_points: usize,
     detector: Detector,
     frame: usize,
-    last: Option<GrayImage>,
+    /// Size and pyramid of the previous frame (built once, when it was the
+    /// `next` image of LK).
+    last: Option<((usize, usize), Pyramid)>,
     refs: Vec<[f32; 2]>,
     r: Mat3,
     t: Vec3,
@@ -111,14 +113,12 @@ impl Odometry {
 
     fn check_frame(&self, img: &GrayImage) -> Result<()> {
         let (w, h) = (img.width(), img.height());
-        if let Some(last) = &self.last {
-            if (last.width(), last.height()) != (w, h) {
+        if let Some(((lw, lh), _)) = &self.last {
+            if (*lw, *lh) != (w, h) {
                 return Err(Error::Odometry(format!(
-                    "frame {} is {w}x{h} but the previous frames are {}x{}: every frame of a \
+                    "frame {} is {w}x{h} but the previous frames are {lw}x{lh}: every frame of a \
                      sequence must have the same size",
-                    self.frame,
-                    last.width(),
-                    last.height()
+                    self.frame
                 )));
             }
         }
@@ -162,7 +162,7 @@ impl Odometry {
             res.redetected = true;
             res.points_out = refs.len();
             self.refs = refs;
-            self.last = Some(img.clone());
+            self.last = Some(((img.width(), img.height()), Pyramid::new(img, self.lk.max_level)));
             self.prev_gt = gt.copied();
             self.frame = 1;
             return Ok(res);
@@ -180,7 +180,8 @@ impl Odometry {
             None
         };
 
-        let flow = calc_optical_flow_pyr_lk(last, img, &self.refs, &self.lk);
+        let pyr = Pyramid::new(img, self.lk.max_level);
+        let flow = calc_optical_flow_pyr_lk_pyramids(&last.1, &pyr, &self.refs, &self.lk);
         let mut refs = Vec::with_capacity(self.refs.len());
         let mut cur = Vec::with_capacity(self.refs.len());
         for ((r, c), &ok) in self.refs.iter().zip(&flow.next_pts).zip(&flow.status) {
@@ -238,7 +239,7 @@ impl Odometry {
         res.position = if i >= 2 { t } else { [0.0; 3] };
         res.points_out = next_refs.len();
         self.refs = next_refs;
-        self.last = Some(img.clone());
+        self.last = Some(((img.width(), img.height()), pyr));
         self.prev_gt = gt.copied();
         self.frame += 1;
         Ok(res)
