@@ -208,13 +208,27 @@ pub fn Status() -> impl IntoView {
                 {move || {
                     tick.get();
                     let now = now_ms();
-                    lab.jobs.get().into_iter().map(|j| view! {
+                    // Once one frame has been analysed, its SIFT time predicts the next
+                    // (same size, same machine): show a filling bar instead of a sweep.
+                    let expected = [Which::Prev, Which::Cur]
+                        .iter()
+                        .filter_map(|&w| lab.frame(w).with_untracked(|f| f.as_ref().map(|f| f.sift_ms)))
+                        .fold(0.0f64, f64::max);
+                    lab.jobs.get().into_iter().map(|j| {
+                        let sifting = j.stage.starts_with("running SIFT");
+                        let fraction = (sifting && expected > 0.0).then(|| ((now - j.started_ms) / expected).min(0.95));
+                        view! {
                         <div class="job">
-                            <div class="bar"><div class="bar-fill"></div></div>
+                            {match fraction {
+                                Some(f) => view! {
+                                    <div class="bar"><div class="bar-known" style:width=format!("{:.0}%", f * 100.0)></div></div>
+                                }.into_any(),
+                                None => view! { <div class="bar"><div class="bar-fill"></div></div> }.into_any(),
+                            }}
                             <span class="job-what">{j.what}</span>
                             <span class="job-stage">{format!("{} · {:.1} s", j.stage, (now - j.started_ms) / 1000.0)}</span>
                         </div>
-                    }).collect_view()
+                    }}).collect_view()
                 }}
             </div>
         </Show>
