@@ -136,8 +136,8 @@ fn constraints(basis: &[[f64; 9]; 4]) -> [[f64; 20]; 10] {
     for i in 0..3 {
         for j in 0..3 {
             let mut acc = [0.0; 10];
-            for k in 0..3 {
-                acc = add_q(&acc, &mul_ll(&e[i][k], &e[j][k]));
+            for (a, b) in e[i].iter().zip(&e[j]) {
+                acc = add_q(&acc, &mul_ll(a, b));
             }
             eet[i][j] = acc;
         }

@@ -19,7 +19,7 @@ impl CvRng {
     }
 
     #[inline]
-    pub fn next(&mut self) -> u32 {
+    pub fn next_u32(&mut self) -> u32 {
         self.state = (self.state & 0xFFFF_FFFF)
             .wrapping_mul(Self::COEFF)
             .wrapping_add(self.state >> 32);
@@ -29,7 +29,7 @@ impl CvRng {
     /// `RNG::uniform(0, n)` for ints: `next() % n` in unsigned 32-bit.
     #[inline]
     pub fn uniform(&mut self, n: u32) -> u32 {
-        self.next() % n
+        self.next_u32() % n
     }
 }
 
@@ -155,7 +155,7 @@ fn jacobi_impl(at: &mut [f64], m: usize, n: usize, n1: usize, w: &mut [f64], vt:
         while ii < 100 && sd <= minval {
             let val0 = 1.0 / m as f64;
             for k in 0..m {
-                at[i * m + k] = if rng.next() & 256 != 0 { val0 } else { -val0 };
+                at[i * m + k] = if rng.next_u32() & 256 != 0 { val0 } else { -val0 };
             }
             for _ in 0..2 {
                 for j in 0..i {
@@ -393,7 +393,7 @@ mod tests {
         // The first draws of cv::RNG((uint64)-1), the state findEssentialMat's
         // RANSAC starts from (state = lo32 * 4164903690 + hi32).
         let mut rng = CvRng::new(u64::MAX);
-        assert_eq!([rng.next(), rng.next(), rng.next()], [130_063_605, 3_133_359_004, 2_578_348_940]);
+        assert_eq!([rng.next_u32(), rng.next_u32(), rng.next_u32()], [130_063_605, 3_133_359_004, 2_578_348_940]);
         assert_eq!(CvRng::new(u64::MAX).uniform(1000), 605);
     }
 

@@ -71,7 +71,7 @@ fn reflect101(mut p: isize, len: usize) -> usize {
 /// `cv::pyrDown` on 8-bit data, exact integer arithmetic: the 5×5 binomial
 /// kernel (sum 256) over reflect-101 of the source level, `+128 >> 8`.
 pub fn pyr_down(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, usize) {
-    let (dw, dh) = ((w + 1) / 2, (h + 1) / 2);
+    let (dw, dh) = (w.div_ceil(2), h.div_ceil(2));
     // Horizontal pass for every source row, kept as exact integers.
     let cols: Vec<[usize; 5]> = (0..dw)
         .map(|x| {
@@ -160,7 +160,7 @@ pub fn build_pyramid(img: &GrayImage, max_level: usize) -> Vec<Level> {
     let (mut w, mut h) = (img.width(), img.height());
     let mut levels = vec![Level::new(img.data().to_vec(), w, h)];
     for _ in 0..max_level {
-        let (nw, nh) = ((w + 1) / 2, (h + 1) / 2);
+        let (nw, nh) = (w.div_ceil(2), h.div_ceil(2));
         if nw <= WIN || nh <= WIN {
             break;
         }
@@ -653,7 +653,8 @@ struct Job<'a> {
     max_level: usize,
     crit: (usize, f64),
     min_eig: f32,
-    /// Forces the scalar kernels (tests compare both paths).
+    /// Forces the scalar kernels (tests compare both paths; wasm has only those).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     scalar: bool,
 }
 
