@@ -1,7 +1,7 @@
 //! The lab's three matching strategies, with their argument checks.
 
 use super::distance::distance_row;
-use super::knn::{knn_row, ranked_row, DMatch};
+use super::knn::{knn_row, DMatch};
 use crate::error::{Error, Result};
 use crate::sift::Features;
 
@@ -85,10 +85,16 @@ impl Strategy {
     pub fn select(&self, query_idx: usize, row: &[f32]) -> Result<Vec<DMatch>> {
         Ok(match *self {
             Strategy::Dt(t) => {
-                // Only the passing candidates need sorting.
-                let passing: Vec<f32> = row.iter().map(|&d| if (d as f64) < t { d } else { f32::INFINITY }).collect();
-                let mut m = ranked_row(query_idx, &passing);
-                m.retain(|m| (m.distance as f64) < t);
+                // Only the passing candidates need sorting; the sort is stable
+                // and they are collected in train order, so ties keep the lower
+                // train index first, as knnMatch(k = n_train) orders them.
+                let mut m: Vec<DMatch> = row
+                    .iter()
+                    .enumerate()
+                    .filter(|&(_, &d)| (d as f64) < t)
+                    .map(|(j, &d)| DMatch { query_idx, train_idx: j, distance: d })
+                    .collect();
+                m.sort_by(|a, b| a.distance.total_cmp(&b.distance));
                 m
             }
             Strategy::Nn(t) => {
