@@ -158,6 +158,11 @@ pub fn load_file(lab: Lab, which: Which, file: web_sys::File) {
 
 /// Loads the pair (FRAME_ID-1, FRAME_ID) from the current source.
 pub fn load_pair(lab: Lab, frame_id: u32) {
+    load_pair_from(lab, frame_id, false);
+}
+
+/// `fresh`: the source just changed, so frames with the same names are not the same frames.
+fn load_pair_from(lab: Lab, frame_id: u32, fresh: bool) {
     let source = lab.source.get_untracked();
     if frame_id < 1 {
         lab.load_error.set(Some("FRAME_ID must be at least 1: frames FRAME_ID-1 and FRAME_ID are matched".into()));
@@ -174,6 +179,12 @@ pub fn load_pair(lab: Lab, frame_id: u32) {
             _ => "the folder",
         };
         lab.load_error.set(Some(format!("{} missing from {where_}: cannot match FRAME_ID {frame_id}", missing.join(" and "))));
+        return;
+    }
+    let showing = |w: Which, id: u32| lab.frame(w).with_untracked(|f| f.as_ref().is_some_and(|f| f.label == frame_path(id)));
+    let pending = lab.jobs.with_untracked(|j| j.iter().any(|j| j.what.ends_with(&frame_path(frame_id))));
+    if !fresh && lab.frame_id.get_untracked() == frame_id && (pending || (showing(Which::Prev, frame_id - 1) && showing(Which::Cur, frame_id))) {
+        // Already shown or on its way (e.g. a second event for the same FRAME_ID).
         return;
     }
     lab.frame_id.set(frame_id);
@@ -222,7 +233,7 @@ pub fn load_demo(lab: Lab, frame_id: Option<u32>) {
         }
         let fid = frame_id.filter(|f| ids.contains(f) && ids.contains(&(f.wrapping_sub(1)))).unwrap_or(ids[1]);
         lab.source.set(Source::Demo(ids));
-        load_pair(lab, fid);
+        load_pair_from(lab, fid, true);
     });
 }
 
@@ -264,7 +275,7 @@ pub fn open_folder(lab: Lab, files: web_sys::FileList, frame_id: Option<u32>) {
     lab.load_error.set(None);
     let fid = frame_id.unwrap_or_else(|| ids.iter().copied().find(|&i| i >= 1 && ids.contains(&(i - 1))).unwrap_or(1));
     lab.source.set(Source::Folder(ids));
-    load_pair(lab, fid);
+    load_pair_from(lab, fid, true);
 }
 
 /// Re-runs SIFT on the loaded frames (after the SIMD width changed).

@@ -120,8 +120,8 @@ pub fn Loader() -> impl IntoView {
                     <form
                         class="frame-id"
                         on:submit=move |ev| {
+                            // Enter already fired `change` (which loads); nothing to send anywhere.
                             ev.prevent_default();
-                            go();
                         }
                     >
                         <label>
