@@ -180,33 +180,43 @@ impl Odometry {
             None
         };
 
-        let pyr = Pyramid::new(img, self.lk.max_level);
-        let flow = calc_optical_flow_pyr_lk_pyramids(&last.1, &pyr, &self.refs, &self.lk);
-        let mut refs = Vec::with_capacity(self.refs.len());
-        let mut cur = Vec::with_capacity(self.refs.len());
-        for ((r, c), &ok) in self.refs.iter().zip(&flow.next_pts).zip(&flow.status) {
-            if ok {
-                refs.push(*r);
-                cur.push(*c);
+        let Odometry { detector, refs: prev_refs, cam, lk, ransac, .. } = self;
+        let track = || -> Result<Tracked> {
+            let pyr = Pyramid::new(img, lk.max_level);
+            let flow = calc_optical_flow_pyr_lk_pyramids(&last.1, &pyr, prev_refs, lk);
+            let mut refs = Vec::with_capacity(prev_refs.len());
+            let mut cur = Vec::with_capacity(prev_refs.len());
+            for ((r, c), &ok) in prev_refs.iter().zip(&flow.next_pts).zip(&flow.status) {
+                if ok {
+                    refs.push(*r);
+                    cur.push(*c);
+                }
             }
-        }
+            if cur.len() < 5 {
+                return Err(Error::Odometry(format!(
+                    "frame {i}: only {} of {} points could be tracked from frame {}; the motion \
+                     needs at least 5 (are the frames consecutive?)",
+                    cur.len(),
+                    prev_refs.len(),
+                    i - 1
+                )));
+            }
+            // points1 = current frame, points2 = previous frame, as the lab calls it.
+            let ess = find_essential_mat(&cur, &refs, cam, ransac)
+                .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+            let e = ess.essential().map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+            let pose = recover_pose(e, &cur, &refs, cam)
+                .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+            Ok(Tracked { pyr, refs, cur, ess, pose })
+        };
+        // From frame 2 on the lab re-detects whenever fewer than 1500 points
+        // were tracked, which is nearly always: natively the detector runs on
+        // another thread while this one tracks (same results, less waiting).
+        let speculate = scale.is_some();
+        let (tracked, mut detected) = run_beside(speculate, detector, img, track);
+        let Tracked { pyr, refs, cur, ess, pose } = tracked?;
         res.points_in = self.refs.len();
         res.tracked = cur.len();
-        if cur.len() < 5 {
-            return Err(Error::Odometry(format!(
-                "frame {i}: only {} of {} points could be tracked from frame {}; the motion \
-                 needs at least 5 (are the frames consecutive?)",
-                cur.len(),
-                self.refs.len(),
-                i - 1
-            )));
-        }
-        // points1 = current frame, points2 = previous frame, as the lab calls it.
-        let ess = find_essential_mat(&cur, &refs, &self.cam, &self.ransac)
-            .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
-        let e = ess.essential().map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
-        let pose = recover_pose(e, &cur, &refs, &self.cam)
-            .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
         res.essential_inliers = ess.inliers;
         res.ransac_iterations = ess.iterations;
         res.pose_inliers = pose.inliers;
@@ -228,7 +238,10 @@ impl Odometry {
                     res.updated = true;
                 }
                 if refs.len() < self.min_points {
-                    next_refs = (self.detector)(img);
+                    next_refs = match detected.take() {
+                        Some(points) => points,
+                        None => (self.detector)(img),
+                    };
                     res.redetected = true;
                 }
             }
@@ -243,6 +256,44 @@ impl Odometry {
         self.prev_gt = gt.copied();
         self.frame += 1;
         Ok(res)
+    }
+}
+
+/// What tracking one frame produced.
+struct Tracked {
+    pyr: Pyramid,
+    refs: Vec<[f32; 2]>,
+    cur: Vec<[f32; 2]>,
+    ess: super::ransac::EssentialResult,
+    pose: super::recover_pose::Pose,
+}
+
+/// Runs `work` and, if `also_detect`, the detector on `img` on a second
+/// thread (native only; on wasm the caller detects later if needed).
+fn run_beside<T>(
+    also_detect: bool,
+    detector: &mut Detector,
+    img: &GrayImage,
+    work: impl FnOnce() -> T,
+) -> (T, Option<Vec<[f32; 2]>>) {
+    if !also_detect {
+        return (work(), None);
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        std::thread::scope(|s| {
+            let handle = s.spawn(|| detector(img));
+            let out = work();
+            // A panicking detector is a bug; fall back to detecting here.
+            let points = handle.join().ok();
+            (out, points)
+        })
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        // No threads: detect afterwards, and only if the loop needs it.
+        let _ = (detector, img);
+        (work(), None)
     }
 }
 
