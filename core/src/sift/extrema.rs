@@ -37,57 +37,42 @@ pub fn scan_layer(
     if w <= 2 * IMG_BORDER {
         return;
     }
-    let mut candidates = Vec::new();
-    let mut buf = ScanBuffers::new(w);
     for r in r_start..r_end {
-        let rows9 = [
-            prev.row(r - 1), prev.row(r), prev.row(r + 1),
-            cur.row(r - 1), cur.row(r), cur.row(r + 1),
-            next.row(r - 1), next.row(r), next.row(r + 1),
-        ];
-        candidates.clear();
-        crate::with_hw_fma!((), find_row_extrema(&rows9, threshold, &mut buf, &mut candidates));
-        for &c in &candidates {
+        let (cp, cc, cn) = (cur.row(r - 1), cur.row(r), cur.row(r + 1));
+        let (pp, pc, pn) = (prev.row(r - 1), prev.row(r), prev.row(r + 1));
+        let (np, nc, nn) = (next.row(r - 1), next.row(r), next.row(r + 1));
+        for c in IMG_BORDER..w - IMG_BORDER {
+            let v = cc[c];
+            if v.abs() <= threshold {
+                continue;
+            }
+            let is_ext = if v > 0.0 {
+                v >= cc[c - 1] && v >= cc[c + 1]
+                    && v >= cp[c - 1] && v >= cp[c] && v >= cp[c + 1]
+                    && v >= cn[c - 1] && v >= cn[c] && v >= cn[c + 1]
+                    && v >= pc[c - 1] && v >= pc[c] && v >= pc[c + 1]
+                    && v >= pp[c - 1] && v >= pp[c] && v >= pp[c + 1]
+                    && v >= pn[c - 1] && v >= pn[c] && v >= pn[c + 1]
+                    && v >= nc[c - 1] && v >= nc[c] && v >= nc[c + 1]
+                    && v >= np[c - 1] && v >= np[c] && v >= np[c + 1]
+                    && v >= nn[c - 1] && v >= nn[c] && v >= nn[c + 1]
+            } else {
+                v <= cc[c - 1] && v <= cc[c + 1]
+                    && v <= cp[c - 1] && v <= cp[c] && v <= cp[c + 1]
+                    && v <= cn[c - 1] && v <= cn[c] && v <= cn[c + 1]
+                    && v <= pc[c - 1] && v <= pc[c] && v <= pc[c + 1]
+                    && v <= pp[c - 1] && v <= pp[c] && v <= pp[c + 1]
+                    && v <= pn[c - 1] && v <= pn[c] && v <= pn[c + 1]
+                    && v <= nc[c - 1] && v <= nc[c] && v <= nc[c + 1]
+                    && v <= np[c - 1] && v <= np[c] && v <= np[c + 1]
+                    && v <= nn[c - 1] && v <= nn[c] && v <= nn[c + 1]
+            };
+            if !is_ext {
+                continue;
+            }
             if let Some(refined) = adjust_local_extremum(dog, o, layer, r, c, p) {
                 push_oriented(gauss, refined, p, out);
             }
-        }
-    }
-}
-
-struct ScanBuffers {
-    vmax: Vec<f32>,
-    vmin: Vec<f32>,
-}
-
-impl ScanBuffers {
-    fn new(w: usize) -> Self {
-        ScanBuffers { vmax: vec![0.0; w], vmin: vec![0.0; w] }
-    }
-}
-
-/// The 26-neighbour test of one row, branch-free so it vectorises: a
-/// positive v is an extremum iff v >= the maximum of its 3x3x3 block (which
-/// contains v itself), a negative one iff v <= the minimum — exactly the
-/// non-strict comparisons OpenCV makes one by one.
-#[inline(always)]
-fn find_row_extrema(rows9: &[&[f32]; 9], threshold: f32, buf: &mut ScanBuffers, out: &mut Vec<usize>) {
-    let w = buf.vmax.len();
-    buf.vmax.copy_from_slice(rows9[0]);
-    buf.vmin.copy_from_slice(rows9[0]);
-    for row in &rows9[1..] {
-        for ((mx, mn), &v) in buf.vmax.iter_mut().zip(buf.vmin.iter_mut()).zip(row.iter()) {
-            *mx = mx.max(v);
-            *mn = mn.min(v);
-        }
-    }
-    let centre = rows9[4];
-    for c in IMG_BORDER..w - IMG_BORDER {
-        let v = centre[c];
-        let hmax = buf.vmax[c - 1].max(buf.vmax[c]).max(buf.vmax[c + 1]);
-        let hmin = buf.vmin[c - 1].min(buf.vmin[c]).min(buf.vmin[c + 1]);
-        if (v > threshold && v >= hmax) || (v < -threshold && v <= hmin) {
-            out.push(c);
         }
     }
 }
