@@ -14,7 +14,7 @@ pub mod ransac;
 pub mod recover_pose;
 
 pub use lk::{calc_optical_flow_pyr_lk, LkParams, LkResult};
-pub use odometry::{Odometry, StepResult};
+pub use odometry::{Odometry, StepResult, Steps};
 pub use ransac::{find_essential_mat, EssentialResult, RansacParams};
 pub use recover_pose::{recover_pose, Pose};
 

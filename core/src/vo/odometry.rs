@@ -259,6 +259,33 @@ impl Odometry {
     }
 }
 
+/// The loop as an iterator: one [`StepResult`] per frame the source yields
+/// (frame image and its ground-truth pose). Stops being useful after the
+/// first error, which it reports as an item.
+pub struct Steps<'a, I> {
+    odo: &'a mut Odometry,
+    frames: I,
+}
+
+impl<I: Iterator<Item = Result<(GrayImage, Option<PoseRow>)>>> Iterator for Steps<'_, I> {
+    type Item = Result<StepResult>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let frame = self.frames.next()?;
+        Some(frame.and_then(|(img, gt)| self.odo.step(&img, gt.as_ref())))
+    }
+}
+
+impl Odometry {
+    /// Iterates the loop over `frames` (e.g. decoded files of a picked folder).
+    pub fn steps<I>(&mut self, frames: I) -> Steps<'_, I::IntoIter>
+    where
+        I: IntoIterator<Item = Result<(GrayImage, Option<PoseRow>)>>,
+    {
+        Steps { odo: self, frames: frames.into_iter() }
+    }
+}
+
 /// What tracking one frame produced.
 struct Tracked {
     pyr: Pyramid,
@@ -381,6 +408,18 @@ mod tests {
         assert!(r3.updated);
         let moved: f64 = (0..3).map(|k| (r3.position[k] - r2.position[k]).powi(2)).sum::<f64>().sqrt();
         assert!((moved - 2.0).abs() < 1e-9, "moved {moved}");
+    }
+
+    #[test]
+    fn iterator_yields_one_result_per_frame() {
+        let cam = Camera { fx: 300.0, fy: 300.0, cx: 160.0, cy: 120.0 };
+        let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+        let frames = (0..4).map(|k| Ok((frame(320, 240, 1.0 + 0.02 * k as f64, &cam), Some(gt(k as f64)))));
+        let out: Vec<StepResult> = odo.steps(frames).collect::<Result<_>>().unwrap();
+        assert_eq!(out.iter().map(|r| r.frame).collect::<Vec<_>>(), vec![0, 1, 2, 3]);
+        assert_eq!(out[3].scale, Some(1.0));
+        assert!(out[2].updated && out[3].updated);
+        assert_eq!(odo.next_frame(), 4);
     }
 
     #[test]
