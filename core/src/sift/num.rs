@@ -32,6 +32,15 @@ pub fn fma_emulated(a: f32, b: f32, c: f32) -> f32 {
     let p = a as f64 * b as f64;
     let c = c as f64;
     let s = p + c;
+    // Rounding the f64 sum to f32 can only differ from rounding the exact
+    // value when the sum landed exactly on an f32 halfway point (the low 29
+    // significand bits are 1000...0) — f32 midpoints are f64 values, so
+    // rounding to f64 can reach one but never cross it. Only then (and for
+    // f32-subnormal magnitudes, where the mask does not apply) is the exact
+    // error needed. This keeps the common path at five f64 operations.
+    if s.to_bits() & 0x1FFF_FFFF != 0x1000_0000 && s.abs() >= f32::MIN_POSITIVE as f64 {
+        return s as f32;
+    }
     // TwoSum: err is the exact rounding error of s = p + c.
     let bb = s - p;
     let err = (p - (s - bb)) + (c - bb);
@@ -238,6 +247,12 @@ mod tests {
         // A midpoint case: 1 + 2^-24 + tiny must round up, double rounding would not.
         let a = 1.0f32 + f32::EPSILON;
         assert_eq!(fma_emulated(a, a, -1.0).to_bits(), a.mul_add(a, -1.0).to_bits());
+        // (1 + 2^-12)^2 = 1 + 2^-11 + 2^-24 is an f32 halfway point; + 2^-80
+        // vanishes in the f64 sum, so a plain f64 add would round to even
+        // (down) where the fused result rounds up.
+        let (h, tiny) = (1.0f32 + 2f32.powi(-12), 2f32.powi(-80));
+        assert_eq!(fma_emulated(h, h, tiny).to_bits(), h.mul_add(h, tiny).to_bits());
+        assert_ne!(((h as f64 * h as f64) + tiny as f64) as f32, h.mul_add(h, tiny));
     }
 
     #[test]
