@@ -65,7 +65,7 @@ pub struct MatchArgs {
 
 #[derive(Args, Debug)]
 pub struct TrajectoryArgs {
-    /// Run up to this frame (default: every frame of the dataset).
+    /// How many frames to run, from frame 0 (like range(N); default: every frame).
     pub frame_id: Option<String>,
     /// Also write the estimated poses in KITTI format (12 numbers a line).
     #[arg(long = "save-poses")]
