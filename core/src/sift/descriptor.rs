@@ -3,7 +3,7 @@
 //! 0.2 and scaled to integers 0..255.
 
 use super::image::Plane;
-use super::num::{exp32f, fast_atan2_deg, floor, fma, magnitude, rne, FLT_EPSILON};
+use super::num::{floor, fma, gradient_samples, rne, FLT_EPSILON};
 use super::{KeyPoint, SiftParams};
 
 const D: usize = 4; // SIFT_DESCR_WIDTH
@@ -79,18 +79,7 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
 
     let len = dxs.len();
     let simd_len = len - len % lanes;
-    // Batch the math kernels over all samples like OpenCV (fastAtan2,
-    // magnitude, exp32f on arrays) so the loops vectorise.
-    let (mut oris, mut mags, mut wts) = (vec![0f32; len], vec![0f32; len], vec![0f32; len]);
-    for k in 0..len {
-        oris[k] = fast_atan2_deg(dys[k], dxs[k]);
-    }
-    for k in 0..len {
-        mags[k] = magnitude(dxs[k], dys[k]);
-    }
-    for k in 0..len {
-        wts[k] = exp32f(ws[k]);
-    }
+    let (oris, mags, wts) = gradient_samples(&dxs, &dys, &ws);
     let mut hist = [0f32; (D + 2) * (D + 2) * (N + 2)];
     for k in 0..len {
         let (ori_k, mag_k, wt) = (oris[k], mags[k], wts[k]);

@@ -155,6 +155,25 @@ macro_rules! with_hw_fma {
     }};
 }
 
+/// Orientation (degrees), magnitude and Gaussian weight of every gradient
+/// sample, each kernel run over the whole array as OpenCV's `hal` calls do,
+/// so the loops vectorise (inlined into the FMA-enabled callers).
+#[inline(always)]
+pub fn gradient_samples(dxs: &[f32], dys: &[f32], w_args: &[f32]) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+    let len = dxs.len();
+    let (mut oris, mut mags, mut wts) = (vec![0f32; len], vec![0f32; len], vec![0f32; len]);
+    for k in 0..len {
+        oris[k] = fast_atan2_deg(dys[k], dxs[k]);
+    }
+    for k in 0..len {
+        mags[k] = magnitude(dxs[k], dys[k]);
+    }
+    for k in 0..len {
+        wts[k] = exp32f(w_args[k]);
+    }
+    (oris, mags, wts)
+}
+
 // fastAtan2 coefficients: the f32 product of each coefficient and (f32)(180/pi).
 const ATAN_P1: f32 = f32::from_bits(0x4265226F);
 const ATAN_P3: f32 = f32::from_bits(0xC19556EE);

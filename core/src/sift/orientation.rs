@@ -4,7 +4,7 @@
 
 use super::extrema::Refined;
 use super::image::Plane;
-use super::num::{exp32f, fast_atan2_deg, fma, magnitude, rne, FLT_EPSILON};
+use super::num::{fma, gradient_samples, rne, FLT_EPSILON};
 use super::{KeyPoint, SiftParams};
 
 const ORI_HIST_BINS: usize = 36;
@@ -74,16 +74,7 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
     let simd_len = len - len % lanes;
     let mut t = [0f32; 36 + 4];
     // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
-    let (mut oris, mut mags, mut wts) = (vec![0f32; len], vec![0f32; len], vec![0f32; len]);
-    for k in 0..len {
-        oris[k] = fast_atan2_deg(dys[k], dxs[k]);
-    }
-    for k in 0..len {
-        mags[k] = magnitude(dxs[k], dys[k]);
-    }
-    for k in 0..len {
-        wts[k] = exp32f(ws[k]);
-    }
+    let (oris, mags, wts) = gradient_samples(&dxs, &dys, &ws);
     for k in 0..len {
         let (wt, ori, mag) = (wts[k], oris[k], mags[k]);
         let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
