@@ -36,12 +36,10 @@ pub fn retain_best(kps: &mut Vec<KeyPoint>, n: usize) {
     if n == 0 || kps.len() <= n {
         return;
     }
-    let len = kps.len();
     nth_element(kps, n - 1);
     let amb = kps[n - 1].response;
     let end = partition(&mut kps[n..], |k| k.response >= amb);
     kps.truncate(n + end);
-    let _ = len;
 }
 
 /// libstdc++ `std::__introselect` with `__lg(n) * 2` depth.
