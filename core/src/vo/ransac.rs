@@ -187,21 +187,11 @@ pub(crate) mod tests {
     /// Mirrors `lcg_scene` of testdata/gen_goldens.py operation by operation,
     /// so both sides hold the same f32 pixels.
     pub(crate) fn pixel_scene(r: &Mat3, t: [f64; 3], n: usize, seed: u64) -> (Vec<[f32; 2]>, Vec<[f32; 2]>) {
+        // The normalized scene, then x·f + c in the same operation order.
         let cam = Camera::default();
-        let mut s = seed;
-        let mut rnd = || {
-            s = s.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            ((s >> 11) as f64) / ((1u64 << 53) as f64)
-        };
-        let (mut a, mut b) = (Vec::new(), Vec::new());
-        for _ in 0..n {
-            let x1 = [rnd() * 8.0 - 4.0, rnd() * 4.0 - 2.0, 5.0 + rnd() * 20.0];
-            let x2: [f64; 3] =
-                std::array::from_fn(|i| r[i][0] * x1[0] + r[i][1] * x1[1] + r[i][2] * x1[2] + t[i]);
-            a.push([(x1[0] / x1[2] * cam.fx + cam.cx) as f32, (x1[1] / x1[2] * cam.fy + cam.cy) as f32]);
-            b.push([(x2[0] / x2[2] * cam.fx + cam.cx) as f32, (x2[1] / x2[2] * cam.fy + cam.cy) as f32]);
-        }
-        (a, b)
+        let (a, b) = crate::vo::five_point::tests::scene(r, t, n, seed);
+        let px = |p: &[f64; 2]| [(p[0] * cam.fx + cam.cx) as f32, (p[1] * cam.fy + cam.cy) as f32];
+        (a.iter().map(px).collect(), b.iter().map(px).collect())
     }
 
     /// cv2.Rodrigues([0.005, -0.0316, 0.005]) and the translation of the golden scene.
