@@ -746,12 +746,7 @@ pub fn calc_optical_flow_pyr_lk(
     pts: &[[f32; 2]],
     params: &LkParams,
 ) -> LkResult {
-    let prev_pyr = build_pyramid(prev, params.max_level);
-    let max_level = prev_pyr.len() - 1;
-    let next_pyr = build_pyramid(next, max_level);
-    let derivs = prev_pyr.iter().map(Deriv::new).collect();
-    let prep = Prepared { prev: &prev_pyr, next: &next_pyr, derivs };
-    track_prepared(&prep, pts, params, false)
+    lk_from_images(prev, next, pts, params, false)
 }
 
 /// The same call with the portable kernels only (what wasm runs).
@@ -761,12 +756,16 @@ pub fn calc_optical_flow_pyr_lk_portable(
     pts: &[[f32; 2]],
     params: &LkParams,
 ) -> LkResult {
+    lk_from_images(prev, next, pts, params, true)
+}
+
+fn lk_from_images(prev: &GrayImage, next: &GrayImage, pts: &[[f32; 2]], params: &LkParams, portable: bool) -> LkResult {
     let prev_pyr = build_pyramid(prev, params.max_level);
     let max_level = prev_pyr.len() - 1;
     let next_pyr = build_pyramid(next, max_level);
     let derivs = prev_pyr.iter().map(Deriv::new).collect();
     let prep = Prepared { prev: &prev_pyr, next: &next_pyr, derivs };
-    track_prepared(&prep, pts, params, true)
+    track_prepared(&prep, pts, params, portable)
 }
 
 fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams, scalar: bool) -> LkResult {
