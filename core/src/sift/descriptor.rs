@@ -41,7 +41,6 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
     let (px, py) = (rne(ptx) as i64, rne(pty) as i64);
     let angle_rad = ori * f32::from_bits(0x3C8EFA35); // (float)(CV_PI/180)
     let (mut cos_t, mut sin_t) = (angle_rad.cos(), angle_rad.sin());
-    let bins_per_deg = N as f32 / 360.0;
     let exp_scale = -1.0 / ((D * D) as f32 * 0.5);
     let hist_width = SCL_FCTR * scl;
     let (rows, cols) = (img.height as i64, img.width as i64);
@@ -51,67 +50,18 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
     cos_t /= hist_width;
     sin_t /= hist_width;
 
-    let cap = ((2 * radius + 1) * (2 * radius + 1)) as usize;
-    let (mut dxs, mut dys, mut ws, mut rbins, mut cbins) =
-        (Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap), Vec::with_capacity(cap));
-    let half = D as f32 / 2.0;
-    for i in -radius..=radius {
-        let Some((j0, j1)) = sample_columns(i, radius, cos_t, sin_t) else { continue };
-        for j in j0..=j1 {
-            let (fi, fj) = (i as f32, j as f32);
-            let c_rot = fma(fj, cos_t, -(fi * sin_t));
-            let r_rot = fma(fj, sin_t, fi * cos_t);
-            let rbin = (r_rot + half) - 0.5;
-            let cbin = (c_rot + half) - 0.5;
-            let (r, c) = (py + i, px + j);
-            if rbin > -1.0 && rbin < D as f32 && cbin > -1.0 && cbin < D as f32
-                && r > 0 && r < rows - 1 && c > 0 && c < cols - 1
-            {
-                let (r, c) = (r as usize, c as usize);
-                dxs.push(img.at(r, c + 1) - img.at(r, c - 1));
-                dys.push(img.at(r - 1, c) - img.at(r + 1, c));
-                rbins.push(rbin);
-                cbins.push(cbin);
-                ws.push(fma(c_rot, c_rot, r_rot * r_rot) * exp_scale);
-            }
-        }
-    }
-
-    let len = dxs.len();
+    let samples = collect_samples(img, px, py, radius, cos_t, sin_t, exp_scale);
+    let len = samples.dx.len();
     let simd_len = len - len % lanes;
-    let (oris, mags, wts) = gradient_samples(&dxs, &dys, &ws);
-    let mut hist = [0f32; (D + 2) * (D + 2) * (N + 2)];
-    for k in 0..len {
-        let (ori_k, mag_k, wt) = (oris[k], mags[k], wts[k]);
-        let (mut rbin, mut cbin) = (rbins[k], cbins[k]);
-        let mut obin = (ori_k - ori) * bins_per_deg;
-        let mag = mag_k * wt;
-        let r0 = floor(rbin);
-        let c0 = floor(cbin);
-        let mut o0 = floor(obin);
-        rbin -= r0 as f32;
-        cbin -= c0 as f32;
-        obin -= o0 as f32;
-        if o0 < 0 {
-            o0 += N as i32;
-        }
-        if o0 >= N as i32 {
-            o0 -= N as i32;
-        }
-        let v_r1 = mag * rbin;
-        let v_r0 = mag - v_r1;
-        let v_rc11 = v_r1 * cbin;
-        let v_rc10 = v_r1 - v_rc11;
-        let v_rc01 = v_r0 * cbin;
-        let v_rc00 = v_r0 - v_rc01;
-        let idx = (((r0 + 1) * (D as i32 + 2) + c0 + 1) * (N as i32 + 2) + o0) as usize;
-        let rows_n = (D + 2) * (N + 2);
-        let n2 = N + 2;
-        // (offset of the "0" orientation bin, weight) for 000,010,100,110.
-        let cells = [(0, v_rc00), (n2, v_rc01), (rows_n, v_rc10), (rows_n + n2, v_rc11)];
+    let (oris, mags, wts) = gradient_samples(&samples.dx, &samples.dy, &samples.w);
+    let mut hist = [0f32; HIST_LEN];
+    let inputs = Rows { rbin: &samples.rbin, cbin: &samples.cbin, ori: &oris, mag: &mags, wt: &wts };
+    let done = accumulate_simd_body(&inputs, simd_len, ori, &mut hist);
+    for k in done..len {
+        let (idx, rc, obin) = bins(&inputs, k, ori);
         if k < simd_len {
             // The SIMD body rounds every product and difference separately.
-            for (off, rc) in cells {
+            for (off, rc) in cell_offsets().into_iter().zip(rc) {
                 let rco1 = rc * obin;
                 let rco0 = rc - rco1;
                 hist[idx + off] += rco0;
@@ -120,7 +70,7 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
         } else {
             // The scalar tail, contracted by GCC: `rc - rc*obin` is one FMA
             // and `hist += rc*obin` another.
-            for (off, rc) in cells {
+            for (off, rc) in cell_offsets().into_iter().zip(rc) {
                 hist[idx + off] += fma(-rc, obin, rc);
                 hist[idx + off + 1] = fma(rc, obin, hist[idx + off + 1]);
             }
@@ -140,6 +90,257 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
         }
     }
     normalize(&mut raw, lanes)
+}
+
+const BINS_PER_DEG: f32 = N as f32 / 360.0;
+const HIST_LEN: usize = (D + 2) * (D + 2) * (N + 2);
+
+/// The gradient samples inside the descriptor window, in OpenCV's order
+/// (row by row, left to right): pixel differences, the Gaussian weight's
+/// exponent and the (row, column) bin coordinates.
+#[derive(Default)]
+struct Samples {
+    dx: Vec<f32>,
+    dy: Vec<f32>,
+    w: Vec<f32>,
+    rbin: Vec<f32>,
+    cbin: Vec<f32>,
+}
+
+/// Per-sample inputs of the histogram loop.
+struct Rows<'a> {
+    rbin: &'a [f32],
+    cbin: &'a [f32],
+    ori: &'a [f32],
+    mag: &'a [f32],
+    wt: &'a [f32],
+}
+
+/// Offsets of the (r, c) = 00, 01, 10, 11 cells' "0" orientation bin.
+#[inline(always)]
+fn cell_offsets() -> [usize; 4] {
+    let n2 = N + 2;
+    [0, n2, (D + 2) * n2, (D + 2) * n2 + n2]
+}
+
+/// Histogram index of sample k's (r0, c0, o0) bin, the four cell weights
+/// (00, 01, 10, 11) and the fractional orientation bin.
+#[inline(always)]
+fn bins(s: &Rows, k: usize, ori: f32) -> (usize, [f32; 4], f32) {
+    let (mut rbin, mut cbin) = (s.rbin[k], s.cbin[k]);
+    let mut obin = (s.ori[k] - ori) * BINS_PER_DEG;
+    let mag = s.mag[k] * s.wt[k];
+    let r0 = floor(rbin);
+    let c0 = floor(cbin);
+    let mut o0 = floor(obin);
+    rbin -= r0 as f32;
+    cbin -= c0 as f32;
+    obin -= o0 as f32;
+    if o0 < 0 {
+        o0 += N as i32;
+    }
+    if o0 >= N as i32 {
+        o0 -= N as i32;
+    }
+    let v_r1 = mag * rbin;
+    let v_r0 = mag - v_r1;
+    let v_rc11 = v_r1 * cbin;
+    let v_rc10 = v_r1 - v_rc11;
+    let v_rc01 = v_r0 * cbin;
+    let v_rc00 = v_r0 - v_rc01;
+    let idx = (((r0 + 1) * (D as i32 + 2) + c0 + 1) * (N as i32 + 2) + o0) as usize;
+    (idx, [v_rc00, v_rc01, v_rc10, v_rc11], obin)
+}
+
+/// OpenCV visits the whole (2r+1)² square and keeps the samples whose
+/// rotated bin coordinates fall in the grid and whose pixel has all four
+/// neighbours. Here the rows and columns that cannot pass are skipped
+/// up front ([`sample_columns`], the image border); the float test still
+/// decides every sample visited, so the samples and their order are OpenCV's.
+#[inline(always)]
+fn collect_samples(img: &Plane, px: i64, py: i64, radius: i64, cos_t: f32, sin_t: f32, exp_scale: f32) -> Samples {
+    let (rows, cols) = (img.height as i64, img.width as i64);
+    let cap = ((2 * radius + 1) * (2 * radius + 1)) as usize;
+    let mut s = Samples {
+        dx: Vec::with_capacity(cap),
+        dy: Vec::with_capacity(cap),
+        w: Vec::with_capacity(cap),
+        rbin: Vec::with_capacity(cap),
+        cbin: Vec::with_capacity(cap),
+    };
+    for i in -radius..=radius {
+        let r = py + i;
+        if r <= 0 || r >= rows - 1 {
+            continue;
+        }
+        let Some((j0, j1)) = sample_columns(i, radius, cos_t, sin_t) else { continue };
+        let (j0, j1) = (j0.max(1 - px), j1.min(cols - 2 - px));
+        if j0 > j1 {
+            continue;
+        }
+        let fi = i as f32;
+        let (a, b) = (-(fi * sin_t), fi * cos_t);
+        let r = r as usize;
+        let (row, up, down) = (img.row(r), img.row(r - 1), img.row(r + 1));
+        let c0 = (px + j0) as usize;
+        let n = (j1 - j0 + 1) as usize;
+        #[cfg(target_arch = "x86_64")]
+        if std::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has AVX-512 F; columns c0-1 ..= c0+n of the
+            // three rows exist (1 <= c0, c0+n <= cols-1), and `s` has room
+            // for the whole square.
+            unsafe { x86::sample_row(&mut s, [row, up, down], c0, n, j0 as f32, [cos_t, sin_t, a, b], exp_scale) };
+            continue;
+        }
+        for t in 0..n {
+            let fj = (j0 + t as i64) as f32;
+            let c_rot = fma(fj, cos_t, a);
+            let r_rot = fma(fj, sin_t, b);
+            let rbin = (r_rot + D as f32 / 2.0) - 0.5;
+            let cbin = (c_rot + D as f32 / 2.0) - 0.5;
+            if rbin > -1.0 && rbin < D as f32 && cbin > -1.0 && cbin < D as f32 {
+                let c = c0 + t;
+                s.dx.push(row[c + 1] - row[c - 1]);
+                s.dy.push(up[c] - down[c]);
+                s.rbin.push(rbin);
+                s.cbin.push(cbin);
+                s.w.push(fma(c_rot, c_rot, r_rot * r_rot) * exp_scale);
+            }
+        }
+    }
+    s
+}
+
+/// Accumulates the samples `0..simd_len` (OpenCV's SIMD body) with vector
+/// arithmetic where the CPU allows; returns how many it did.
+#[inline(always)]
+fn accumulate_simd_body(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HIST_LEN]) -> usize {
+    #[cfg(target_arch = "x86_64")]
+    if std::is_x86_feature_detected!("avx512f") {
+        // SAFETY: the CPU has AVX-512 F; all rows hold at least simd_len values.
+        return unsafe { x86::accumulate(s, simd_len, ori, hist) };
+    }
+    let _ = (s, simd_len, ori, hist);
+    0
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::{cell_offsets, Rows, Samples, BINS_PER_DEG, D, HIST_LEN, N};
+    use std::arch::x86_64::*;
+
+    /// One row of the window, 16 columns at a time: the same operations as
+    /// the scalar loop, lanes kept by compress-store so the order is unchanged.
+    #[target_feature(enable = "avx512f")]
+    pub unsafe fn sample_row(
+        s: &mut Samples,
+        [row, up, down]: [&[f32]; 3],
+        c0: usize,
+        n: usize,
+        j0: f32,
+        [cos_t, sin_t, a, b]: [f32; 4],
+        exp_scale: f32,
+    ) {
+        let lane = _mm512_setr_ps(0., 1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12., 13., 14., 15.);
+        let (cos_v, sin_v, a_v, b_v) = (_mm512_set1_ps(cos_t), _mm512_set1_ps(sin_t), _mm512_set1_ps(a), _mm512_set1_ps(b));
+        let (half, point5, lo, hi) = (_mm512_set1_ps(D as f32 / 2.0), _mm512_set1_ps(0.5), _mm512_set1_ps(-1.0), _mm512_set1_ps(D as f32));
+        let mut t = 0;
+        while t < n {
+            let valid: __mmask16 = if n - t >= 16 { 0xFFFF } else { (1u16 << (n - t)) - 1 };
+            let fj = _mm512_add_ps(_mm512_set1_ps(j0 + t as f32), lane);
+            let c_rot = _mm512_fmadd_ps(fj, cos_v, a_v);
+            let r_rot = _mm512_fmadd_ps(fj, sin_v, b_v);
+            let rbin = _mm512_sub_ps(_mm512_add_ps(r_rot, half), point5);
+            let cbin = _mm512_sub_ps(_mm512_add_ps(c_rot, half), point5);
+            let m = valid
+                & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(rbin, lo)
+                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(rbin, hi)
+                & _mm512_cmp_ps_mask::<_CMP_GT_OQ>(cbin, lo)
+                & _mm512_cmp_ps_mask::<_CMP_LT_OQ>(cbin, hi);
+            if m != 0 {
+                let c = c0 + t;
+                let dx = _mm512_sub_ps(
+                    _mm512_maskz_loadu_ps(valid, row.as_ptr().add(c + 1)),
+                    _mm512_maskz_loadu_ps(valid, row.as_ptr().add(c - 1)),
+                );
+                let dy = _mm512_sub_ps(
+                    _mm512_maskz_loadu_ps(valid, up.as_ptr().add(c)),
+                    _mm512_maskz_loadu_ps(valid, down.as_ptr().add(c)),
+                );
+                let w = _mm512_mul_ps(_mm512_fmadd_ps(c_rot, c_rot, _mm512_mul_ps(r_rot, r_rot)), _mm512_set1_ps(exp_scale));
+                let len = s.dx.len();
+                let k = m.count_ones() as usize;
+                for (v, x) in [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)] {
+                    debug_assert!(v.capacity() >= len + k);
+                    _mm512_mask_compressstoreu_ps(v.as_mut_ptr().add(len).cast(), m, x);
+                    v.set_len(len + k);
+                }
+            }
+            t += 16;
+        }
+    }
+
+    /// The histogram update of OpenCV's SIMD body: bin indices and the eight
+    /// weights of 16 samples computed in vectors (every product and
+    /// difference rounded separately, as there), then added to the bins
+    /// sample by sample so each bin sees its contributions in order.
+    #[target_feature(enable = "avx512f")]
+    pub unsafe fn accumulate(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HIST_LEN]) -> usize {
+        const FLOOR: i32 = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+        let (ori_v, bpd) = (_mm512_set1_ps(ori), _mm512_set1_ps(BINS_PER_DEG));
+        let (zero, n_v) = (_mm512_setzero_si512(), _mm512_set1_epi32(N as i32));
+        let offs = cell_offsets();
+        let mut k = 0;
+        while k < simd_len {
+            let count = (simd_len - k).min(16);
+            let valid: __mmask16 = if count == 16 { 0xFFFF } else { (1u16 << count) - 1 };
+            let load = |v: &[f32]| _mm512_maskz_loadu_ps(valid, v.as_ptr().add(k));
+            let (mut rbin, mut cbin) = (load(s.rbin), load(s.cbin));
+            let mut obin = _mm512_mul_ps(_mm512_sub_ps(load(s.ori), ori_v), bpd);
+            let mag = _mm512_mul_ps(load(s.mag), load(s.wt));
+            let r0 = _mm512_cvt_roundps_epi32::<FLOOR>(rbin);
+            let c0 = _mm512_cvt_roundps_epi32::<FLOOR>(cbin);
+            let mut o0 = _mm512_cvt_roundps_epi32::<FLOOR>(obin);
+            rbin = _mm512_sub_ps(rbin, _mm512_cvtepi32_ps(r0));
+            cbin = _mm512_sub_ps(cbin, _mm512_cvtepi32_ps(c0));
+            obin = _mm512_sub_ps(obin, _mm512_cvtepi32_ps(o0));
+            o0 = _mm512_mask_add_epi32(o0, _mm512_cmplt_epi32_mask(o0, zero), o0, n_v);
+            o0 = _mm512_mask_sub_epi32(o0, _mm512_cmpge_epi32_mask(o0, n_v), o0, n_v);
+            let v_r1 = _mm512_mul_ps(mag, rbin);
+            let v_r0 = _mm512_sub_ps(mag, v_r1);
+            let v_rc11 = _mm512_mul_ps(v_r1, cbin);
+            let v_rc10 = _mm512_sub_ps(v_r1, v_rc11);
+            let v_rc01 = _mm512_mul_ps(v_r0, cbin);
+            let v_rc00 = _mm512_sub_ps(v_r0, v_rc01);
+            let idx = _mm512_add_epi32(
+                _mm512_mullo_epi32(
+                    _mm512_add_epi32(
+                        _mm512_mullo_epi32(_mm512_add_epi32(r0, _mm512_set1_epi32(1)), _mm512_set1_epi32(D as i32 + 2)),
+                        _mm512_add_epi32(c0, _mm512_set1_epi32(1)),
+                    ),
+                    _mm512_set1_epi32(N as i32 + 2),
+                ),
+                o0,
+            );
+            let mut idx_a = [0i32; 16];
+            _mm512_storeu_si512(idx_a.as_mut_ptr().cast(), idx);
+            let mut w = [[0f32; 16]; 8];
+            for (c, rc) in [v_rc00, v_rc01, v_rc10, v_rc11].into_iter().enumerate() {
+                let rco1 = _mm512_mul_ps(rc, obin);
+                _mm512_storeu_ps(w[2 * c].as_mut_ptr(), _mm512_sub_ps(rc, rco1));
+                _mm512_storeu_ps(w[2 * c + 1].as_mut_ptr(), rco1);
+            }
+            for l in 0..count {
+                let idx = idx_a[l] as usize;
+                for (c, off) in offs.into_iter().enumerate() {
+                    hist[idx + off] += w[2 * c][l];
+                    hist[idx + off + 1] += w[2 * c + 1][l];
+                }
+            }
+            k += count;
+        }
+        k
+    }
 }
 
 /// A conservative range of j for row i outside which no sample can land

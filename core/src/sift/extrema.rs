@@ -37,44 +37,200 @@ pub fn scan_layer(
     if w <= 2 * IMG_BORDER {
         return;
     }
+    let mut candidates = Vec::new();
     for r in r_start..r_end {
-        let (cp, cc, cn) = (cur.row(r - 1), cur.row(r), cur.row(r + 1));
-        let (pp, pc, pn) = (prev.row(r - 1), prev.row(r), prev.row(r + 1));
-        let (np, nc, nn) = (next.row(r - 1), next.row(r), next.row(r + 1));
-        for c in IMG_BORDER..w - IMG_BORDER {
-            let v = cc[c];
-            if v.abs() <= threshold {
-                continue;
-            }
-            let is_ext = if v > 0.0 {
-                v >= cc[c - 1] && v >= cc[c + 1]
-                    && v >= cp[c - 1] && v >= cp[c] && v >= cp[c + 1]
-                    && v >= cn[c - 1] && v >= cn[c] && v >= cn[c + 1]
-                    && v >= pc[c - 1] && v >= pc[c] && v >= pc[c + 1]
-                    && v >= pp[c - 1] && v >= pp[c] && v >= pp[c + 1]
-                    && v >= pn[c - 1] && v >= pn[c] && v >= pn[c + 1]
-                    && v >= nc[c - 1] && v >= nc[c] && v >= nc[c + 1]
-                    && v >= np[c - 1] && v >= np[c] && v >= np[c + 1]
-                    && v >= nn[c - 1] && v >= nn[c] && v >= nn[c + 1]
-            } else {
-                v <= cc[c - 1] && v <= cc[c + 1]
-                    && v <= cp[c - 1] && v <= cp[c] && v <= cp[c + 1]
-                    && v <= cn[c - 1] && v <= cn[c] && v <= cn[c + 1]
-                    && v <= pc[c - 1] && v <= pc[c] && v <= pc[c + 1]
-                    && v <= pp[c - 1] && v <= pp[c] && v <= pp[c + 1]
-                    && v <= pn[c - 1] && v <= pn[c] && v <= pn[c + 1]
-                    && v <= nc[c - 1] && v <= nc[c] && v <= nc[c + 1]
-                    && v <= np[c - 1] && v <= np[c] && v <= np[c + 1]
-                    && v <= nn[c - 1] && v <= nn[c] && v <= nn[c + 1]
-            };
-            if !is_ext {
-                continue;
-            }
+        let rows = [
+            prev.row(r - 1), prev.row(r), prev.row(r + 1),
+            cur.row(r - 1), cur.row(r), cur.row(r + 1),
+            next.row(r - 1), next.row(r), next.row(r + 1),
+        ];
+        candidates.clear();
+        row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates);
+        for &c in &candidates {
             if let Some(refined) = adjust_local_extremum(dog, o, layer, r, c, p) {
                 push_oriented(gauss, refined, p, out);
             }
         }
     }
+}
+
+/// Pixels per block of the vectorised 26-neighbour test.
+const LANES: usize = 16;
+
+/// The columns of the middle row of `rows` (three rows each of the previous,
+/// current and next DoG layer, centred on the scanned row) where OpenCV's
+/// test holds: |v| above the threshold and v ≥ all 26 neighbours if positive,
+/// ≤ all of them if negative. OpenCV's scalar form stops at the first failed
+/// comparison; comparing v with the neighbours' max and min decides the same
+/// (no NaN can arise from 8-bit images) for a block of pixels at once.
+#[inline(always)]
+fn row_extrema_generic(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>) {
+    let centre = rows[4];
+    let is_extremum = |v: f32, mx: f32, mn: f32| (v > thr && v >= mx) || (v < -thr && v <= mn);
+    let mut x = cols.start;
+    while x + LANES <= cols.end {
+        let (mut mx, mut mn) = ([f32::NEG_INFINITY; LANES], [f32::INFINITY; LANES]);
+        for (i, row) in rows.iter().enumerate() {
+            for dx in 0..3 {
+                if i == 4 && dx == 1 {
+                    continue; // the pixel itself
+                }
+                let s = &row[x + dx - 1..x + dx - 1 + LANES];
+                for l in 0..LANES {
+                    mx[l] = if s[l] > mx[l] { s[l] } else { mx[l] };
+                    mn[l] = if s[l] < mn[l] { s[l] } else { mn[l] };
+                }
+            }
+        }
+        let v = &centre[x..x + LANES];
+        let mut mask = 0u32;
+        for l in 0..LANES {
+            mask |= (is_extremum(v[l], mx[l], mn[l]) as u32) << l;
+        }
+        while mask != 0 {
+            out.push(x + mask.trailing_zeros() as usize);
+            mask &= mask - 1;
+        }
+        x += LANES;
+    }
+    for c in x..cols.end {
+        let (mut mx, mut mn) = (f32::NEG_INFINITY, f32::INFINITY);
+        for (i, row) in rows.iter().enumerate() {
+            for dx in 0..3 {
+                if i != 4 || dx != 1 {
+                    mx = mx.max(row[c + dx - 1]);
+                    mn = mn.min(row[c + dx - 1]);
+                }
+            }
+        }
+        if is_extremum(centre[c], mx, mn) {
+            out.push(c);
+        }
+    }
+}
+
+/// The same test with AVX-512 / AVX2 intrinsics: threshold first, then the
+/// 8 neighbours in the current layer, then the 18 in the layers around it,
+/// leaving a block as soon as none of its pixels can still be an extremum.
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::*;
+
+    /// Returns the first column not examined (the scalar tail starts there).
+    /// Needs every row to extend one pixel past `cols.end`.
+    #[target_feature(enable = "avx512f")]
+    pub unsafe fn row_extrema_avx512(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>) -> usize {
+        let p: [*const f32; 9] = std::array::from_fn(|i| rows[i].as_ptr());
+        let (hi, lo) = (_mm512_set1_ps(thr), _mm512_set1_ps(-thr));
+        let mut x = cols.start;
+        while x + 16 <= cols.end {
+            let v = _mm512_loadu_ps(p[4].add(x));
+            let (pos, neg) = (_mm512_cmp_ps_mask::<_CMP_GT_OQ>(v, hi), _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, lo));
+            let layer = |(mut pos, mut neg): (u16, u16), ps: [usize; 3], skip_centre: bool| {
+                let (mut mx, mut mn) = (_mm512_set1_ps(f32::NEG_INFINITY), _mm512_set1_ps(f32::INFINITY));
+                for (i, &r) in ps.iter().enumerate() {
+                    for d in 0..3 {
+                        if skip_centre && i == 1 && d == 1 {
+                            continue;
+                        }
+                        let s = _mm512_loadu_ps(p[r].add(x + d - 1));
+                        mx = _mm512_max_ps(mx, s);
+                        mn = _mm512_min_ps(mn, s);
+                    }
+                }
+                pos &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, mx);
+                neg &= _mm512_cmp_ps_mask::<_CMP_LE_OQ>(v, mn);
+                (pos, neg)
+            };
+            let live = |(pos, neg): (u16, u16)| pos | neg != 0;
+            let m = (pos, neg);
+            if !live(m) {
+                x += 16;
+                continue;
+            }
+            let m = layer(m, [3, 4, 5], true);
+            if !live(m) {
+                x += 16;
+                continue;
+            }
+            let m = layer(m, [0, 1, 2], false);
+            if live(m) {
+                let (pos, neg) = layer(m, [6, 7, 8], false);
+                let mut mask = (pos | neg) as u32;
+                while mask != 0 {
+                    out.push(x + mask.trailing_zeros() as usize);
+                    mask &= mask - 1;
+                }
+            }
+            x += 16;
+        }
+        x
+    }
+
+    #[target_feature(enable = "avx2")]
+    pub unsafe fn row_extrema_avx2(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>) -> usize {
+        let p: [*const f32; 9] = std::array::from_fn(|i| rows[i].as_ptr());
+        let (hi, lo) = (_mm256_set1_ps(thr), _mm256_set1_ps(-thr));
+        let mut x = cols.start;
+        while x + 8 <= cols.end {
+            let v = _mm256_loadu_ps(p[4].add(x));
+            let (pos, neg) = (_mm256_cmp_ps::<_CMP_GT_OQ>(v, hi), _mm256_cmp_ps::<_CMP_LT_OQ>(v, lo));
+            let layer = |(mut pos, mut neg): (__m256, __m256), ps: [usize; 3], skip_centre: bool| {
+                let (mut mx, mut mn) = (_mm256_set1_ps(f32::NEG_INFINITY), _mm256_set1_ps(f32::INFINITY));
+                for (i, &r) in ps.iter().enumerate() {
+                    for d in 0..3 {
+                        if skip_centre && i == 1 && d == 1 {
+                            continue;
+                        }
+                        let s = _mm256_loadu_ps(p[r].add(x + d - 1));
+                        mx = _mm256_max_ps(mx, s);
+                        mn = _mm256_min_ps(mn, s);
+                    }
+                }
+                pos = _mm256_and_ps(pos, _mm256_cmp_ps::<_CMP_GE_OQ>(v, mx));
+                neg = _mm256_and_ps(neg, _mm256_cmp_ps::<_CMP_LE_OQ>(v, mn));
+                (pos, neg)
+            };
+            let bits = |(pos, neg): (__m256, __m256)| _mm256_movemask_ps(_mm256_or_ps(pos, neg)) as u32;
+            let m = (pos, neg);
+            if bits(m) == 0 {
+                x += 8;
+                continue;
+            }
+            let m = layer(m, [3, 4, 5], true);
+            if bits(m) == 0 {
+                x += 8;
+                continue;
+            }
+            let m = layer(m, [0, 1, 2], false);
+            if bits(m) != 0 {
+                let mut mask = bits(layer(m, [6, 7, 8], false));
+                while mask != 0 {
+                    out.push(x + mask.trailing_zeros() as usize);
+                    mask &= mask - 1;
+                }
+            }
+            x += 8;
+        }
+        x
+    }
+}
+
+fn row_extrema(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>) {
+    #[cfg(target_arch = "x86_64")]
+    if rows.iter().all(|r| r.len() > cols.end) && cols.start >= 1 {
+        // SAFETY (both calls): the CPU supports the features the function was
+        // compiled for, and every row has a pixel on each side of `cols`.
+        let done = if std::is_x86_feature_detected!("avx512f") {
+            unsafe { x86::row_extrema_avx512(rows, thr, cols.clone(), out) }
+        } else if std::is_x86_feature_detected!("avx2") {
+            unsafe { x86::row_extrema_avx2(rows, thr, cols.clone(), out) }
+        } else {
+            cols.start
+        };
+        return row_extrema_generic(rows, thr, done..cols.end, out);
+    }
+    row_extrema_generic(rows, thr, cols, out)
 }
 
 /// A refined extremum, before orientation: the keypoint fields plus the

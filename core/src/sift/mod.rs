@@ -130,10 +130,20 @@ fn scale_space(img: &GrayImage, p: &SiftParams) -> ScaleSpace {
 fn find_keypoints(ss: &ScaleSpace, p: &SiftParams) -> Vec<KeyPoint> {
     let mut kps = Vec::new();
     let nl = p.n_octave_layers;
+    // Bands of rows, so the three big layers of the first octave spread over
+    // all threads; OpenCV splits its scan by rows the same way.
+    const BAND: usize = 32;
     let jobs: Vec<(usize, usize, usize)> = (0..ss.octaves)
-        .flat_map(|o| (1..=nl).map(move |l| (o, l, ss.dog[o * (nl + 2)].height)))
+        .flat_map(|o| {
+            let h = ss.dog[o * (nl + 2)].height;
+            (1..=nl).flat_map(move |l| (0..h).step_by(BAND).map(move |r0| (o, l, r0)))
+        })
         .collect();
-    run_parallel(&jobs, |&(o, l, h), out| extrema::scan_layer(&ss.gauss, &ss.dog, o, l, 0..h, p, out), &mut kps);
+    run_parallel(
+        &jobs,
+        |&(o, l, r0), out| extrema::scan_layer(&ss.gauss, &ss.dog, o, l, r0..r0 + BAND, p, out),
+        &mut kps,
+    );
     order::remove_duplicated_sorted(&mut kps);
     if p.nfeatures > 0 {
         order::retain_best(&mut kps, p.nfeatures);
@@ -195,7 +205,7 @@ pub fn detect_and_compute(img: &GrayImage, p: &SiftParams) -> Features {
     let ss = scale_space(img, p);
     let keypoints = find_keypoints(&ss, p);
     let mut descriptors = vec![[0u8; 128]; keypoints.len()];
-    par::for_each_chunk(&mut descriptors, 1, |first, rows| {
+    par::for_each_chunk_dynamic(&mut descriptors, 16, |first, rows| {
         for (i, row) in rows.iter_mut().enumerate() {
             *row = descriptor::descriptor(&ss.gauss, &keypoints[first + i], p);
         }

@@ -37,3 +37,35 @@ pub fn for_each_chunk<T: Send>(out: &mut [T], unit: usize, f: impl Fn(usize, &mu
         f(i * per, chunk);
     }
 }
+
+/// Calls `f(first_index, chunk)` on the `chunk_len`-element chunks of `out`,
+/// handing them to the threads one at a time: for work whose cost varies a
+/// lot between chunks (a descriptor's cost grows with its keypoint's size),
+/// where [`for_each_chunk`]'s equal split would leave a thread idle.
+pub fn for_each_chunk_dynamic<T: Send>(out: &mut [T], chunk_len: usize, f: impl Fn(usize, &mut [T]) + Sync) {
+    let chunk_len = chunk_len.max(1);
+    let n = threads().min(out.len().div_ceil(chunk_len));
+    if n <= 1 {
+        f(0, out);
+        return;
+    }
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        let queue = std::sync::Mutex::new(out.chunks_mut(chunk_len).enumerate());
+        std::thread::scope(|s| {
+            for _ in 0..n {
+                s.spawn(|| loop {
+                    // A poisoned lock means another worker panicked; stop taking work.
+                    let next = match queue.lock() {
+                        Ok(mut q) => q.next(),
+                        Err(_) => None,
+                    };
+                    let Some((i, chunk)) = next else { break };
+                    f(i * chunk_len, chunk);
+                });
+            }
+        });
+    }
+    #[cfg(target_arch = "wasm32")]
+    f(0, out);
+}

@@ -69,8 +69,15 @@ pub fn dog_pyramid(gauss: &[Plane], octaves: usize, layers: usize) -> Vec<Plane>
         for i in 0..layers + 2 {
             let a = &gauss[o * per + i];
             let b = &gauss[o * per + i + 1];
-            let data = b.data.iter().zip(&a.data).map(|(&b, &a)| b - a).collect();
-            out.push(Plane { width: a.width, height: a.height, data });
+            let mut d = Plane::new(a.width, a.height);
+            super::par::for_each_chunk(&mut d.data, a.width, |y0, rows| {
+                let first = y0 * a.width;
+                let (a, b) = (&a.data[first..first + rows.len()], &b.data[first..first + rows.len()]);
+                for ((d, &a), &b) in rows.iter_mut().zip(a).zip(b) {
+                    *d = b - a;
+                }
+            });
+            out.push(d);
         }
     }
     out
