@@ -71,7 +71,7 @@ fn row_pass(src: &Plane, kx: &[f32]) -> Plane {
     let (w, h) = (src.width, src.height);
     let ks = kx.len();
     let r = ks / 2;
-    let mut out = Plane::new(w, h);
+    let mut out = Plane::for_overwrite(w, h);
     super::par::for_each_chunk(&mut out.data, w, |y0, chunk| {
         let mut padded = vec![0f32; w + 2 * r];
         for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
@@ -99,7 +99,7 @@ fn row_pass(src: &Plane, kx: &[f32]) -> Plane {
 fn column_pass(src: &Plane, ky: &[f32]) -> Plane {
     let (w, h) = (src.width, src.height);
     let c = ky.len() / 2;
-    let mut out = Plane::new(w, h);
+    let mut out = Plane::for_overwrite(w, h);
     super::par::for_each_chunk(&mut out.data, w, |y0, chunk| {
         for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
             let y = y0 + dy;
@@ -126,26 +126,36 @@ fn column_pass(src: &Plane, ky: &[f32]) -> Plane {
 // has it) and picked at run time, because `mul_add` without the `fma` target
 // feature is a library call per tap. On wasm the FMA is `num::fma`.
 
-/// Pixels per register block: 4 AVX-512 or 8 AVX2 vectors.
+/// Pixels per register block: 4 AVX-512 or 8 AVX2 vectors; the rest of a
+/// row goes in blocks of one AVX-512 vector, then pixel by pixel.
 const BLOCK: usize = 64;
+const SMALL_BLOCK: usize = 16;
+
+#[inline(always)]
+fn row_block<const B: usize>(src: &[f32], kx: &[f32], dst: &mut [f32], fma: &impl Fn(f32, f32, f32) -> f32) {
+    let mut acc = [0f32; B];
+    for (a, &s) in acc.iter_mut().zip(&src[..B]) {
+        *a = s * kx[0];
+    }
+    for (k, &kv) in kx.iter().enumerate().skip(1) {
+        for (a, &s) in acc.iter_mut().zip(&src[k..k + B]) {
+            *a = fma(s, kv, *a);
+        }
+    }
+    dst[..B].copy_from_slice(&acc);
+}
 
 #[inline(always)]
 fn accumulate_row_generic(padded: &[f32], kx: &[f32], dst: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
     let w = dst.len();
     let mut x = 0;
     while x + BLOCK <= w {
-        let mut acc = [0f32; BLOCK];
-        let src = &padded[x..x + BLOCK + kx.len() - 1];
-        for (a, &s) in acc.iter_mut().zip(&src[..BLOCK]) {
-            *a = s * kx[0];
-        }
-        for (k, &kv) in kx.iter().enumerate().skip(1) {
-            for (a, &s) in acc.iter_mut().zip(&src[k..k + BLOCK]) {
-                *a = fma(s, kv, *a);
-            }
-        }
-        dst[x..x + BLOCK].copy_from_slice(&acc);
+        row_block::<BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
         x += BLOCK;
+    }
+    while x + SMALL_BLOCK <= w {
+        row_block::<SMALL_BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
+        x += SMALL_BLOCK;
     }
     for (i, d) in dst.iter_mut().enumerate().skip(x) {
         let mut a = padded[i] * kx[0];
@@ -157,6 +167,28 @@ fn accumulate_row_generic(padded: &[f32], kx: &[f32], dst: &mut [f32], fma: impl
 }
 
 #[inline(always)]
+fn column_block<const B: usize>(
+    x: usize,
+    centre: &[f32],
+    pairs: &[(&[f32], &[f32])],
+    ky: &[f32],
+    dst: &mut [f32],
+    fma: &impl Fn(f32, f32, f32) -> f32,
+) {
+    let mut acc = [0f32; B];
+    for (a, &s) in acc.iter_mut().zip(&centre[x..x + B]) {
+        *a = s * ky[0];
+    }
+    for (k, (up, down)) in pairs.iter().enumerate() {
+        let kv = ky[k + 1];
+        for ((a, &u), &d) in acc.iter_mut().zip(&up[x..x + B]).zip(&down[x..x + B]) {
+            *a = fma(u + d, kv, *a);
+        }
+    }
+    dst[x..x + B].copy_from_slice(&acc);
+}
+
+#[inline(always)]
 fn accumulate_column_generic(
     centre: &[f32],
     pairs: &[(&[f32], &[f32])],
@@ -165,24 +197,17 @@ fn accumulate_column_generic(
     fma: impl Fn(f32, f32, f32) -> f32,
 ) {
     let w = dst.len();
-    let kc = ky[0];
     let mut x = 0;
     while x + BLOCK <= w {
-        let mut acc = [0f32; BLOCK];
-        for (a, &s) in acc.iter_mut().zip(&centre[x..x + BLOCK]) {
-            *a = s * kc;
-        }
-        for (k, (up, down)) in pairs.iter().enumerate() {
-            let kv = ky[k + 1];
-            for ((a, &u), &d) in acc.iter_mut().zip(&up[x..x + BLOCK]).zip(&down[x..x + BLOCK]) {
-                *a = fma(u + d, kv, *a);
-            }
-        }
-        dst[x..x + BLOCK].copy_from_slice(&acc);
+        column_block::<BLOCK>(x, centre, pairs, ky, dst, &fma);
         x += BLOCK;
     }
+    while x + SMALL_BLOCK <= w {
+        column_block::<SMALL_BLOCK>(x, centre, pairs, ky, dst, &fma);
+        x += SMALL_BLOCK;
+    }
     for i in x..w {
-        let mut a = centre[i] * kc;
+        let mut a = centre[i] * ky[0];
         for (k, (up, down)) in pairs.iter().enumerate() {
             a = fma(up[i] + down[i], ky[k + 1], a);
         }

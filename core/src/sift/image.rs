@@ -1,7 +1,9 @@
 //! The f32 plane every pyramid level is stored in.
 
+use std::cell::RefCell;
+
 /// A row-major f32 image: one Gaussian or DoG level.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Debug, PartialEq)]
 pub struct Plane {
     pub width: usize,
     pub height: usize,
@@ -9,8 +11,28 @@ pub struct Plane {
 }
 
 impl Plane {
+    /// A zeroed plane, its buffer taken from this thread's spare buffers
+    /// when one is big enough.
     pub fn new(width: usize, height: usize) -> Self {
-        Plane { width, height, data: vec![0.0; width * height] }
+        let n = width * height;
+        let mut data = take_spare(n).unwrap_or_default();
+        data.clear();
+        data.resize(n, 0.0);
+        Plane { width, height, data }
+    }
+
+    /// A plane whose every pixel the caller is about to write: a spare
+    /// buffer is reused as it is (stale but initialised values), without
+    /// the zeroing pass.
+    pub fn for_overwrite(width: usize, height: usize) -> Self {
+        let n = width * height;
+        let mut data = take_spare(n).unwrap_or_default();
+        if data.len() >= n {
+            data.truncate(n);
+        } else {
+            data.resize(n, 0.0);
+        }
+        Plane { width, height, data }
     }
 
     #[inline(always)]
@@ -26,5 +48,60 @@ impl Plane {
     #[inline(always)]
     pub fn at(&self, y: usize, x: usize) -> f32 {
         self.data[y * self.width + x]
+    }
+}
+
+impl Clone for Plane {
+    fn clone(&self) -> Self {
+        let mut p = Plane::for_overwrite(self.width, self.height);
+        p.data.copy_from_slice(&self.data);
+        p
+    }
+}
+
+// One SIFT call allocates and frees about 100 MB of planes (KITTI frame:
+// 2482×752 floats per level of the first octave). Fresh allocations that
+// large come from the kernel as zero pages, and page faults plus trimming
+// cost a fifth of the run; the video loop and the app run SIFT frame after
+// frame, so a freed plane's buffer is kept for the next one instead.
+const MAX_SPARE_BUFFERS: usize = 48;
+
+thread_local! {
+    static SPARE: RefCell<Vec<Vec<f32>>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The smallest spare buffer holding at least `n` floats.
+fn take_spare(n: usize) -> Option<Vec<f32>> {
+    if n < 4096 {
+        return None; // small planes: the allocator is fast enough
+    }
+    SPARE
+        .try_with(|s| {
+            let mut s = s.borrow_mut();
+            let best = s
+                .iter()
+                .enumerate()
+                .filter(|(_, b)| b.capacity() >= n)
+                .min_by_key(|(_, b)| b.capacity())
+                .map(|(i, _)| i)?;
+            Some(s.swap_remove(best))
+        })
+        .ok()
+        .flatten()
+}
+
+impl Drop for Plane {
+    fn drop(&mut self) {
+        if self.data.capacity() < 4096 {
+            return;
+        }
+        let buf = std::mem::take(&mut self.data);
+        let _ = SPARE.try_with(|s| {
+            if let Ok(mut s) = s.try_borrow_mut() {
+                if s.len() < MAX_SPARE_BUFFERS {
+                    s.push(buf);
+                }
+            }
+        });
     }
 }

@@ -34,7 +34,7 @@ fn upsample2x(img: &GrayImage) -> Plane {
         }
     };
     // Horizontal pass.
-    let mut tmp = Plane::new(w2, h);
+    let mut tmp = Plane::for_overwrite(w2, h);
     let xt: Vec<_> = (0..w2).map(|t| taps(t, w)).collect();
     for y in 0..h {
         let src = &img.data()[y * w..(y + 1) * w];
@@ -42,7 +42,7 @@ fn upsample2x(img: &GrayImage) -> Plane {
             tmp.data[y * w2 + x] = src[a] as f32 * (1.0 - f) + src[b] as f32 * f;
         }
     }
-    let mut out = Plane::new(w2, h2);
+    let mut out = Plane::for_overwrite(w2, h2);
     for y2 in 0..h2 {
         let (a, b, f) = taps(y2, h);
         for x in 0..w2 {

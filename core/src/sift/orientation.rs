@@ -59,16 +59,18 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
             continue;
         }
         let (up, row, down) = (img.row(y as usize - 1), img.row(y as usize), img.row(y as usize + 1));
-        for j in -radius..=radius {
-            let x = c as i64 + j as i64;
-            if x <= 0 || x >= cols - 1 {
-                continue;
-            }
-            let x = x as usize;
-            dxs.push(row[x + 1] - row[x - 1]);
-            dys.push(up[x] - down[x]);
-            ws.push((i * i + j * j) as f32 * expf_scale);
+        // The columns with both horizontal neighbours inside the image, as
+        // OpenCV's per-sample test keeps them, taken as one slice.
+        let j0 = (-radius as i64).max(1 - c as i64);
+        let j1 = (radius as i64).min(cols - 2 - c as i64);
+        if j0 > j1 {
+            continue;
         }
+        let (x0, x1) = ((c as i64 + j0) as usize, (c as i64 + j1) as usize + 1);
+        dxs.extend(row[x0 + 1..x1 + 1].iter().zip(&row[x0 - 1..x1 - 1]).map(|(&a, &b)| a - b));
+        dys.extend(up[x0..x1].iter().zip(&down[x0..x1]).map(|(&a, &b)| a - b));
+        let ii = i * i;
+        ws.extend((j0 as i32..=j1 as i32).map(|j| (ii + j * j) as f32 * expf_scale));
     }
     let len = dxs.len();
     let simd_len = len - len % lanes;

@@ -32,10 +32,14 @@ pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) 
     let sig = level_sigmas(sigma, layers);
     let per = layers + 3;
     let mut pyr: Vec<Plane> = Vec::with_capacity(octaves * per);
+    if octaves == 0 {
+        return pyr;
+    }
+    pyr.push(base);
     for o in 0..octaves {
         for i in 0..per {
             let level = if o == 0 && i == 0 {
-                base.clone()
+                continue;
             } else if i == 0 {
                 // INTER_NEAREST to (w/2, h/2) of the level with twice the base σ;
                 // for these sizes it always samples src[2y][2x].
@@ -51,7 +55,7 @@ pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) 
 
 fn downsample(src: &Plane) -> Plane {
     let (w, h) = (src.width / 2, src.height / 2);
-    let mut out = Plane::new(w, h);
+    let mut out = Plane::for_overwrite(w, h);
     for y in 0..h {
         let s = src.row(2 * y);
         for (x, d) in out.row_mut(y).iter_mut().enumerate() {
@@ -69,7 +73,7 @@ pub fn dog_pyramid(gauss: &[Plane], octaves: usize, layers: usize) -> Vec<Plane>
         for i in 0..layers + 2 {
             let a = &gauss[o * per + i];
             let b = &gauss[o * per + i + 1];
-            let mut d = Plane::new(a.width, a.height);
+            let mut d = Plane::for_overwrite(a.width, a.height);
             super::par::for_each_chunk(&mut d.data, a.width, |y0, rows| {
                 let first = y0 * a.width;
                 let (a, b) = (&a.data[first..first + rows.len()], &b.data[first..first + rows.len()]);
