@@ -101,22 +101,29 @@ fn column_pass(src: &Plane, ky: &[f32]) -> Plane {
     let c = ky.len() / 2;
     let mut out = Plane::for_overwrite(w, h);
     super::par::for_each_chunk(&mut out.data, w, |y0, chunk| {
-        for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
-            let y = y0 + dy;
-            let centre = src.row(y);
-            let pairs: Vec<(&[f32], &[f32])> = (1..=c)
-                .map(|k| {
+        let mut pairs: Vec<(&[f32], &[f32])> = Vec::with_capacity(c);
+        // Vertical strips narrow enough that the 2c+1 source rows of one
+        // output row stay in L1 while the next row reuses 2c of them.
+        for x0 in (0..w).step_by(STRIP) {
+            let x1 = (x0 + STRIP).min(w);
+            for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
+                let y = y0 + dy;
+                pairs.clear();
+                pairs.extend((1..=c).map(|k| {
                     (
-                        src.row(reflect101(y as isize + k as isize, h)),
-                        src.row(reflect101(y as isize - k as isize, h)),
+                        &src.row(reflect101(y as isize + k as isize, h))[x0..x1],
+                        &src.row(reflect101(y as isize - k as isize, h))[x0..x1],
                     )
-                })
-                .collect();
-            accumulate_column(centre, &pairs, &ky[c..], dst);
+                }));
+                accumulate_column(&src.row(y)[x0..x1], &pairs, &ky[c..], &mut dst[x0..x1]);
+            }
         }
     });
     out
 }
+
+/// Columns per strip of the column pass (1 KB of each row).
+const STRIP: usize = 256;
 
 // The accumulation loops keep a block of output pixels in registers while
 // every tap is applied (x blocks outer, taps inner), so each tap costs one
