@@ -331,7 +331,9 @@ mod x86 {
                 _mm512_storeu_ps(w[2 * c + 1].as_mut_ptr(), rco1);
             }
             for l in 0..count {
-                let idx = idx_a[l] as usize;
+                // r0, c0 in [-1, 3] and o0 in [0, 7] keep idx in 0..=287; the
+                // clamp only tells the compiler so (no bounds checks below).
+                let idx = idx_a[l].clamp(0, 287) as usize;
                 for (c, off) in offs.into_iter().enumerate() {
                     hist[idx + off] += w[2 * c][l];
                     hist[idx + off + 1] += w[2 * c + 1][l];

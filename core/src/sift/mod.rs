@@ -204,11 +204,23 @@ pub fn detect_and_compute(img: &GrayImage, p: &SiftParams) -> Features {
     }
     let ss = scale_space(img, p);
     let keypoints = find_keypoints(&ss, p);
-    let mut descriptors = vec![[0u8; 128]; keypoints.len()];
-    par::for_each_chunk_dynamic(&mut descriptors, 16, |first, rows| {
+    // Visit the keypoints level by level, top to bottom, so neighbouring
+    // windows share cached rows (in OpenCV's response order, each window is
+    // a fresh set of cache and TLB misses); each row goes back to its slot.
+    let mut visit: Vec<usize> = (0..keypoints.len()).collect();
+    visit.sort_by(|&a, &b| {
+        let (ka, kb) = (&keypoints[a], &keypoints[b]);
+        (ka.octave & 0xffff).cmp(&(kb.octave & 0xffff)).then(ka.y.total_cmp(&kb.y))
+    });
+    let mut computed = vec![[0u8; 128]; keypoints.len()];
+    par::for_each_chunk_dynamic(&mut computed, 16, |first, rows| {
         for (i, row) in rows.iter_mut().enumerate() {
-            *row = descriptor::descriptor(&ss.gauss, &keypoints[first + i], p);
+            *row = descriptor::descriptor(&ss.gauss, &keypoints[visit[first + i]], p);
         }
     });
+    let mut descriptors = vec![[0u8; 128]; keypoints.len()];
+    for (&k, row) in visit.iter().zip(computed) {
+        descriptors[k] = row;
+    }
     Features { keypoints, descriptors }
 }
