@@ -61,7 +61,28 @@ pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
         return src.clone();
     }
     let rows = row_pass(src, &kx);
-    column_pass(&rows, &ky)
+    column_pass(&rows, &ky, None).0
+}
+
+/// GaussianBlur(src, σ) and the difference blur − src (the DoG level SIFT
+/// takes next), subtracted row by row while the blurred row is still in L1
+/// rather than in a second pass over both planes. Same values as
+/// [`gaussian_blur`] followed by a plain f32 subtraction.
+pub fn gaussian_blur_and_difference(src: &Plane, sigma: f64) -> (Plane, Plane) {
+    let (w, h) = (src.width, src.height);
+    if w <= 1 || h <= 1 {
+        // The size-1 kernel cases of the top octaves: tiny, done plainly.
+        let blurred = gaussian_blur(src, sigma);
+        let mut diff = Plane::for_overwrite(w, h);
+        for ((d, &b), &a) in diff.data.iter_mut().zip(&blurred.data).zip(&src.data) {
+            *d = b - a;
+        }
+        return (blurred, diff);
+    }
+    let kernel = gaussian_kernel(sigma);
+    let rows = row_pass(src, &kernel);
+    let (blurred, diff) = column_pass(&rows, &kernel, Some(src));
+    (blurred, diff.unwrap_or_else(|| Plane::new(w, h)))
 }
 
 /// Row pass: a plain (non-symmetric) filter accumulated left to right, the
@@ -96,11 +117,16 @@ fn row_pass(src: &Plane, kx: &[f32]) -> Plane {
 
 /// Column pass: OpenCV's symmetric column filter, centre tap first, then
 /// the pair sums `R[y+k] + R[y-k]` (rounded) fused with `ky[c+k]`.
-fn column_pass(src: &Plane, ky: &[f32]) -> Plane {
+fn column_pass(src: &Plane, ky: &[f32], minus: Option<&Plane>) -> (Plane, Option<Plane>) {
     let (w, h) = (src.width, src.height);
     let c = ky.len() / 2;
     let mut out = Plane::for_overwrite(w, h);
-    super::par::for_each_chunk(&mut out.data, w, |y0, chunk| {
+    let mut diff = minus.map(|_| Plane::for_overwrite(w, h));
+    let diff_data: &mut [f32] = match diff.as_mut() {
+        Some(d) => &mut d.data,
+        None => &mut [],
+    };
+    super::par::for_each_chunk_pair(&mut out.data, diff_data, w, |y0, chunk, diff_chunk| {
         let mut pairs: Vec<(&[f32], &[f32])> = Vec::with_capacity(c);
         // Vertical strips narrow enough that the 2c+1 source rows of one
         // output row stay in L1 while the next row reuses 2c of them.
@@ -115,11 +141,18 @@ fn column_pass(src: &Plane, ky: &[f32]) -> Plane {
                         &src.row(reflect101(y as isize - k as isize, h))[x0..x1],
                     )
                 }));
-                accumulate_column(&src.row(y)[x0..x1], &pairs, &ky[c..], &mut dst[x0..x1]);
+                let dst = &mut dst[x0..x1];
+                accumulate_column(&src.row(y)[x0..x1], &pairs, &ky[c..], dst);
+                if let Some(minus) = minus {
+                    let d = &mut diff_chunk[dy * w + x0..dy * w + x1];
+                    for ((d, &b), &a) in d.iter_mut().zip(dst.iter()).zip(&minus.row(y)[x0..x1]) {
+                        *d = b - a;
+                    }
+                }
             }
         }
     });
-    out
+    (out, diff)
 }
 
 /// Columns per strip of the column pass (1 KB of each row).

@@ -122,8 +122,7 @@ struct ScaleSpace {
 fn scale_space(img: &GrayImage, p: &SiftParams) -> ScaleSpace {
     let base = initial::initial_image(img, p.sigma);
     let octaves = pyramid::octave_count(base.width, base.height);
-    let gauss = pyramid::gaussian_pyramid(base, octaves, p.sigma, p.n_octave_layers);
-    let dog = pyramid::dog_pyramid(&gauss, octaves, p.n_octave_layers);
+    let (gauss, dog) = pyramid::pyramids(base, octaves, p.sigma, p.n_octave_layers);
     ScaleSpace { gauss, dog, octaves }
 }
 

@@ -1,6 +1,6 @@
 //! Gaussian and difference-of-Gaussians pyramids (spec §4, §5).
 
-use super::blur::gaussian_blur;
+use super::blur::gaussian_blur_and_difference;
 use super::image::Plane;
 use super::num::rne64;
 
@@ -27,30 +27,32 @@ pub fn level_sigmas(sigma: f64, layers: usize) -> Vec<f64> {
     sig
 }
 
-/// `layers + 3` Gaussian levels per octave, indexed `o * (layers + 3) + i`.
-pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) -> Vec<Plane> {
+/// `layers + 3` Gaussian levels per octave, indexed `o * (layers + 3) + i`,
+/// and the `layers + 2` DoG levels, `o * (layers + 2) + i` = level i+1 − level i
+/// (plain f32 differences), each made by the blur that makes level i+1.
+pub fn pyramids(base: Plane, octaves: usize, sigma: f64, layers: usize) -> (Vec<Plane>, Vec<Plane>) {
     let sig = level_sigmas(sigma, layers);
     let per = layers + 3;
-    let mut pyr: Vec<Plane> = Vec::with_capacity(octaves * per);
+    let mut gauss: Vec<Plane> = Vec::with_capacity(octaves * per);
+    let mut dog: Vec<Plane> = Vec::with_capacity(octaves * (per - 1));
     if octaves == 0 {
-        return pyr;
+        return (gauss, dog);
     }
-    pyr.push(base);
+    gauss.push(base);
     for o in 0..octaves {
-        for i in 0..per {
-            let level = if o == 0 && i == 0 {
-                continue;
-            } else if i == 0 {
-                // INTER_NEAREST to (w/2, h/2) of the level with twice the base σ;
-                // for these sizes it always samples src[2y][2x].
-                downsample(&pyr[(o - 1) * per + layers])
-            } else {
-                gaussian_blur(&pyr[o * per + i - 1], sig[i])
-            };
-            pyr.push(level);
+        if o > 0 {
+            // INTER_NEAREST to (w/2, h/2) of the level with twice the base σ;
+            // for these sizes it always samples src[2y][2x].
+            let first = downsample(&gauss[(o - 1) * per + layers]);
+            gauss.push(first);
+        }
+        for i in 1..per {
+            let (level, diff) = gaussian_blur_and_difference(&gauss[o * per + i - 1], sig[i]);
+            gauss.push(level);
+            dog.push(diff);
         }
     }
-    pyr
+    (gauss, dog)
 }
 
 fn downsample(src: &Plane) -> Plane {
@@ -60,28 +62,6 @@ fn downsample(src: &Plane) -> Plane {
         let s = src.row(2 * y);
         for (x, d) in out.row_mut(y).iter_mut().enumerate() {
             *d = s[2 * x];
-        }
-    }
-    out
-}
-
-/// `layers + 2` DoG levels per octave: plain f32 differences of neighbours.
-pub fn dog_pyramid(gauss: &[Plane], octaves: usize, layers: usize) -> Vec<Plane> {
-    let per = layers + 3;
-    let mut out = Vec::with_capacity(octaves * (layers + 2));
-    for o in 0..octaves {
-        for i in 0..layers + 2 {
-            let a = &gauss[o * per + i];
-            let b = &gauss[o * per + i + 1];
-            let mut d = Plane::for_overwrite(a.width, a.height);
-            super::par::for_each_chunk(&mut d.data, a.width, |y0, rows| {
-                let first = y0 * a.width;
-                let (a, b) = (&a.data[first..first + rows.len()], &b.data[first..first + rows.len()]);
-                for ((d, &a), &b) in rows.iter_mut().zip(a).zip(b) {
-                    *d = b - a;
-                }
-            });
-            out.push(d);
         }
     }
     out
