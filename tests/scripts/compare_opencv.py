@@ -169,22 +169,13 @@ json.dump(out, sys.stdout)
 
 
 def make_draws(seed, n, frames, counts):
-    """Seeded (frame, feature, algo, threshold): thresholds dt/nn in [0, 500] (nn: 20% None),
-    nndr in [0, 1], rounded to 2 decimals."""
+    """Seeded (frame, feature, algo, threshold) over the frame pairs (gen_goldens.draw_case)."""
     rng = random.Random(seed)
     pairs = [f for f in frames if f >= 1 and (f - 1) in counts]
     out = []
     for _ in range(n):
         f = rng.choice(pairs)
-        feat = rng.randrange(max(counts[f - 1], 1))
-        algo = rng.choice(("dt", "nn", "nndr"))
-        if algo == "nndr":
-            t = round(rng.uniform(0.0, 1.0), 2)
-        else:
-            t = round(rng.uniform(0.0, 500.0), 2)
-            if algo == "nn" and rng.random() < 0.2:
-                t = None
-        out.append((f, feat, algo, t))
+        out.append((f, *gen_goldens.draw_case(rng, counts[f - 1])))
     return out
 
 

@@ -107,21 +107,28 @@ def run_worker(dataset, out_dir, ipp: bool):
                     "--out", out_dir], env=env, check=True)
 
 
+def draw_case(rng, n_features):
+    """One random (feature, algo, threshold) for a frame pair whose query frame has n_features:
+    thresholds dt/nn uniform in [0, 500] (nn: 20% None), nndr in [0, 1], rounded to 2 decimals.
+    Shared by this generator and compare_opencv.py."""
+    feat = rng.randrange(max(n_features, 1))
+    algo = rng.choice(("dt", "nn", "nndr"))
+    if algo == "nndr":
+        t = round(rng.uniform(0.0, 1.0), 2)
+    else:
+        t = round(rng.uniform(0.0, 500.0), 2)
+        if algo == "nn" and rng.random() < 0.2:
+            t = None
+    return feat, algo, t
+
+
 def draws(counts, n_draws, seed):
     """(frame, feature, algo, threshold) cases: seeded uniform draws, then edge cases."""
     rng = random.Random(seed)
     out = []
     for _ in range(n_draws):
         f = rng.randint(1, 5)
-        feat = rng.randrange(counts[f - 1])
-        algo = rng.choice(("dt", "nn", "nndr"))
-        if algo == "nndr":
-            t = round(rng.uniform(0.0, 1.0), 2)
-        else:
-            t = round(rng.uniform(0.0, 500.0), 2)
-            if algo == "nn" and rng.random() < 0.2:
-                t = None
-        out.append((f, feat, algo, t))
+        out.append((f, *draw_case(rng, counts[f - 1])))
     for f in range(1, 6):
         last = counts[f - 1] - 1
         mid = rng.randrange(counts[f - 1])
