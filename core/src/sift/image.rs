@@ -1,6 +1,6 @@
 //! The f32 plane every pyramid level is stored in.
 
-use std::cell::RefCell;
+use std::sync::Mutex;
 
 /// A row-major f32 image: one Gaussian or DoG level.
 #[derive(Debug, PartialEq)]
@@ -63,31 +63,25 @@ impl Clone for Plane {
 // 2482×752 floats per level of the first octave). Fresh allocations that
 // large come from the kernel as zero pages, and page faults plus trimming
 // cost a fifth of the run; the video loop and the app run SIFT frame after
-// frame, so a freed plane's buffer is kept for the next one instead.
+// frame (the video loop on a new thread each time), so a freed plane's
+// buffer is kept for the next one instead, in one process-wide set.
 const MAX_SPARE_BUFFERS: usize = 48;
 
-thread_local! {
-    static SPARE: RefCell<Vec<Vec<f32>>> = const { RefCell::new(Vec::new()) };
-}
+static SPARE: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
 
 /// The smallest spare buffer holding at least `n` floats.
 fn take_spare(n: usize) -> Option<Vec<f32>> {
     if n < 4096 {
         return None; // small planes: the allocator is fast enough
     }
-    SPARE
-        .try_with(|s| {
-            let mut s = s.borrow_mut();
-            let best = s
-                .iter()
-                .enumerate()
-                .filter(|(_, b)| b.capacity() >= n)
-                .min_by_key(|(_, b)| b.capacity())
-                .map(|(i, _)| i)?;
-            Some(s.swap_remove(best))
-        })
-        .ok()
-        .flatten()
+    let mut spare = SPARE.lock().ok()?;
+    let best = spare
+        .iter()
+        .enumerate()
+        .filter(|(_, b)| b.capacity() >= n)
+        .min_by_key(|(_, b)| b.capacity())
+        .map(|(i, _)| i)?;
+    Some(spare.swap_remove(best))
 }
 
 impl Drop for Plane {
@@ -95,13 +89,10 @@ impl Drop for Plane {
         if self.data.capacity() < 4096 {
             return;
         }
-        let buf = std::mem::take(&mut self.data);
-        let _ = SPARE.try_with(|s| {
-            if let Ok(mut s) = s.try_borrow_mut() {
-                if s.len() < MAX_SPARE_BUFFERS {
-                    s.push(buf);
-                }
+        if let Ok(mut spare) = SPARE.lock() {
+            if spare.len() < MAX_SPARE_BUFFERS {
+                spare.push(std::mem::take(&mut self.data));
             }
-        });
+        }
     }
 }
