@@ -330,10 +330,34 @@ pub fn run(
     odo: &mut Odometry,
     n: usize,
     poses: &[PoseRow],
-    mut load: impl FnMut(usize) -> Result<GrayImage>,
+    mut load: impl FnMut(usize) -> Result<GrayImage> + Send,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<StepResult>> {
     let mut out = Vec::with_capacity(n);
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        // Frame i+1 is read and decoded on another thread while frame i is
+        // processed (the lab reads each frame inside its loop).
+        std::thread::scope(|s| -> Result<()> {
+            let (tx, rx) = std::sync::mpsc::sync_channel(1);
+            s.spawn(move || {
+                for i in 0..n {
+                    let frame = load(i);
+                    let failed = frame.is_err();
+                    if tx.send(frame).is_err() || failed {
+                        break;
+                    }
+                }
+            });
+            for i in 0..n {
+                let img = rx.recv().map_err(|_| Error::Odometry(format!("frame {i} could not be read")))??;
+                out.push(odo.step(&img, poses.get(i))?);
+                progress(i + 1, n);
+            }
+            Ok(())
+        })?;
+    }
+    #[cfg(target_arch = "wasm32")]
     for i in 0..n {
         let img = load(i)?;
         out.push(odo.step(&img, poses.get(i))?);
