@@ -38,6 +38,8 @@ if [ -z "$DATASET" ]; then
         DATASET="$ROOT/tests/fixtures/mykitti"
     fi
 fi
+# Absolute: cargo runs the benches from core/.
+DATASET="$(cd "$DATASET" && pwd)"
 export SIFTLAB_BENCH_DATASET="$DATASET"
 OUT="$ROOT/target/bench_compare"
 mkdir -p "$OUT"
