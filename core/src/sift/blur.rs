@@ -278,6 +278,79 @@ mod x86 {
     }
 }
 
+/// WebAssembly: four pixels per vector with the lane-wise exact FMA
+/// emulation, four vectors per block; the rest of the row pixel by pixel.
+#[cfg(target_arch = "wasm32")]
+mod wasm {
+    use super::super::num::{fma, fma_emulated_x4};
+    use core::arch::wasm32::*;
+
+    const V: usize = 4; // vectors per block
+
+    fn load(s: &[f32], i: usize) -> v128 {
+        let s = &s[i..i + 4];
+        // SAFETY: `s` holds exactly four f32; v128_load needs no alignment.
+        unsafe { v128_load(s.as_ptr().cast()) }
+    }
+
+    fn store(d: &mut [f32], i: usize, v: v128) {
+        let d = &mut d[i..i + 4];
+        // SAFETY: `d` holds exactly four f32; v128_store needs no alignment.
+        unsafe { v128_store(d.as_mut_ptr().cast(), v) }
+    }
+
+    pub fn row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
+        let w = dst.len();
+        let mut x = 0;
+        while x + 4 * V <= w {
+            let k0 = f32x4_splat(kx[0]);
+            let mut acc: [v128; V] = core::array::from_fn(|v| f32x4_mul(load(padded, x + 4 * v), k0));
+            for (k, &kv) in kx.iter().enumerate().skip(1) {
+                for (v, a) in acc.iter_mut().enumerate() {
+                    *a = fma_emulated_x4(load(padded, x + k + 4 * v), kv, *a);
+                }
+            }
+            for (v, a) in acc.into_iter().enumerate() {
+                store(dst, x + 4 * v, a);
+            }
+            x += 4 * V;
+        }
+        for i in x..w {
+            let mut a = padded[i] * kx[0];
+            for (k, &kv) in kx.iter().enumerate().skip(1) {
+                a = fma(padded[i + k], kv, a);
+            }
+            dst[i] = a;
+        }
+    }
+
+    pub fn column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
+        let w = dst.len();
+        let mut x = 0;
+        while x + 4 * V <= w {
+            let kc = f32x4_splat(ky[0]);
+            let mut acc: [v128; V] = core::array::from_fn(|v| f32x4_mul(load(centre, x + 4 * v), kc));
+            for (k, (up, down)) in pairs.iter().enumerate() {
+                for (v, a) in acc.iter_mut().enumerate() {
+                    let sum = f32x4_add(load(up, x + 4 * v), load(down, x + 4 * v));
+                    *a = fma_emulated_x4(sum, ky[k + 1], *a);
+                }
+            }
+            for (v, a) in acc.into_iter().enumerate() {
+                store(dst, x + 4 * v, a);
+            }
+            x += 4 * V;
+        }
+        for i in x..w {
+            let mut a = centre[i] * ky[0];
+            for (k, (up, down)) in pairs.iter().enumerate() {
+                a = fma(up[i] + down[i], ky[k + 1], a);
+            }
+            dst[i] = a;
+        }
+    }
+}
+
 fn accumulate_row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
@@ -289,6 +362,9 @@ fn accumulate_row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
             return unsafe { x86::row_avx2(padded, kx, dst) };
         }
     }
+    #[cfg(target_arch = "wasm32")]
+    return wasm::row(padded, kx, dst);
+    #[allow(unreachable_code)]
     accumulate_row_generic(padded, kx, dst, super::num::fma)
 }
 
@@ -303,6 +379,9 @@ fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst
             return unsafe { x86::column_avx2(centre, pairs, ky, dst) };
         }
     }
+    #[cfg(target_arch = "wasm32")]
+    return wasm::column(centre, pairs, ky, dst);
+    #[allow(unreachable_code)]
     accumulate_column_generic(centre, pairs, ky, dst, super::num::fma)
 }
 

@@ -37,8 +37,10 @@ pub fn fma_emulated(a: f32, b: f32, c: f32) -> f32 {
     // significand bits are 1000...0) — f32 midpoints are f64 values, so
     // rounding to f64 can reach one but never cross it. Only then (and for
     // f32-subnormal magnitudes, where the mask does not apply) is the exact
-    // error needed. This keeps the common path at five f64 operations.
-    if s.to_bits() & 0x1FFF_FFFF != 0x1000_0000 && s.abs() >= f32::MIN_POSITIVE as f64 {
+    // error needed. This keeps the common path at five f64 operations. A zero
+    // sum is exact (two floats cannot cancel to below the f64 subnormals),
+    // so it takes the common path too: black image areas blur to zeros.
+    if s.to_bits() & 0x1FFF_FFFF != 0x1000_0000 && (s.abs() >= f32::MIN_POSITIVE as f64 || s == 0.0) {
         return s as f32;
     }
     // TwoSum: err is the exact rounding error of s = p + c.
@@ -54,6 +56,38 @@ pub fn fma_emulated(a: f32, b: f32, c: f32) -> f32 {
         }
     }
     f64::from_bits(bits) as f32
+}
+
+/// [`fma_emulated`] on four lanes with WebAssembly SIMD: the same f64
+/// product and sum per lane, rounded to f32 together; a lane whose sum needs
+/// the exact error (an f32 halfway point, an f32-subnormal magnitude) sends
+/// the four lanes through the scalar function, so results are identical.
+#[cfg(target_arch = "wasm32")]
+#[inline(always)]
+pub fn fma_emulated_x4(a: core::arch::wasm32::v128, b: f32, c: core::arch::wasm32::v128) -> core::arch::wasm32::v128 {
+    use core::arch::wasm32::*;
+    let high = |v: v128| i32x4_shuffle::<2, 3, 0, 1>(v, v);
+    let bd = f64x2_splat(b as f64);
+    let lo = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(a), bd), f64x2_promote_low_f32x4(c));
+    let hi = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(high(a)), bd), f64x2_promote_low_f32x4(high(c)));
+    let hard = |s: v128| {
+        let midpoint = i64x2_eq(v128_and(s, i64x2_splat(0x1FFF_FFFF)), i64x2_splat(0x1000_0000));
+        let tiny = v128_and(f64x2_lt(f64x2_abs(s), f64x2_splat(f32::MIN_POSITIVE as f64)), f64x2_ne(s, f64x2_splat(0.0)));
+        v128_or(midpoint, tiny)
+    };
+    if v128_any_true(v128_or(hard(lo), hard(hi))) {
+        let (a, c) = (
+            [f32x4_extract_lane::<0>(a), f32x4_extract_lane::<1>(a), f32x4_extract_lane::<2>(a), f32x4_extract_lane::<3>(a)],
+            [f32x4_extract_lane::<0>(c), f32x4_extract_lane::<1>(c), f32x4_extract_lane::<2>(c), f32x4_extract_lane::<3>(c)],
+        );
+        return f32x4(
+            fma_emulated(a[0], b, c[0]),
+            fma_emulated(a[1], b, c[1]),
+            fma_emulated(a[2], b, c[2]),
+            fma_emulated(a[3], b, c[3]),
+        );
+    }
+    i32x4_shuffle::<0, 1, 4, 5>(f32x4_demote_f64x2_zero(lo), f32x4_demote_f64x2_zero(hi))
 }
 
 /// `cvRound` on floats: `lrintf` in the default rounding mode.
