@@ -36,19 +36,23 @@ fn upsample2x(img: &GrayImage) -> Plane {
     // Horizontal pass.
     let mut tmp = Plane::for_overwrite(w2, h);
     let xt: Vec<_> = (0..w2).map(|t| taps(t, w)).collect();
-    for y in 0..h {
-        let src = &img.data()[y * w..(y + 1) * w];
-        for (x, &(a, b, f)) in xt.iter().enumerate() {
-            tmp.data[y * w2 + x] = src[a] as f32 * (1.0 - f) + src[b] as f32 * f;
+    super::par::for_each_chunk(&mut tmp.data, w2, |y0, rows| {
+        for (dy, row) in rows.chunks_exact_mut(w2).enumerate() {
+            let src = &img.data()[(y0 + dy) * w..(y0 + dy + 1) * w];
+            for (d, &(a, b, f)) in row.iter_mut().zip(&xt) {
+                *d = src[a] as f32 * (1.0 - f) + src[b] as f32 * f;
+            }
         }
-    }
+    });
     let mut out = Plane::for_overwrite(w2, h2);
-    for y2 in 0..h2 {
-        let (a, b, f) = taps(y2, h);
-        for x in 0..w2 {
-            out.data[y2 * w2 + x] = tmp.data[a * w2 + x] * (1.0 - f) + tmp.data[b * w2 + x] * f;
+    super::par::for_each_chunk(&mut out.data, w2, |y0, rows| {
+        for (dy, row) in rows.chunks_exact_mut(w2).enumerate() {
+            let (a, b, f) = taps(y0 + dy, h);
+            for ((d, &ta), &tb) in row.iter_mut().zip(tmp.row(a)).zip(tmp.row(b)) {
+                *d = ta * (1.0 - f) + tb * f;
+            }
         }
-    }
+    });
     out
 }
 
