@@ -2,6 +2,16 @@
 //! (spec §16): OpenCV sums float squares, but every partial sum of squared
 //! 0..255 differences is an integer below 2^24, so the float sum is exact and
 //! equals this integer sum; the distance is its correctly rounded f32 sqrt.
+//!
+//! The row kernels below compute that same integer sum with SIMD: bytes are
+//! zero-extended to i16, subtracted (|d| <= 255), and squared-and-paired by a
+//! 16-bit multiply-add into i32 lanes (2 * 255^2 per pair, 128 * 255^2 in
+//! all, far below 2^31). Integer arithmetic is exact in any order, the i32 ->
+//! f32 conversion is exact below 2^24 and the vector sqrt is IEEE correctly
+//! rounded like `f32::sqrt`, so every kernel returns bit-identical distances.
+//! Each kernel handles four train rows per pass so their four horizontal sums
+//! share one reduction and one 4-wide sqrt; a remainder of < 4 rows takes the
+//! scalar path.
 
 /// The exact sum of squared differences of two descriptors.
 #[inline(always)]
@@ -23,27 +33,228 @@ pub fn distance(a: &[u8; 128], b: &[u8; 128]) -> f32 {
 /// Distances from one query descriptor to every train descriptor.
 pub fn distance_row(q: &[u8; 128], train: &[[u8; 128]], out: &mut Vec<f32>) {
     out.clear();
-    out.reserve(train.len());
+    out.resize(train.len(), 0.0);
+    distance_row_into(q, train, out);
+}
+
+/// [`distance_row`] into a slice of `train.len()` distances (the fastest
+/// kernel the CPU supports). Extra `out` entries are left untouched.
+pub fn distance_row_into(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
+    let n = train.len().min(out.len());
+    let (train, out) = (&train[..n], &mut out[..n]);
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, the only feature the function enables.
-        unsafe { distance_row_avx2(q, train, out) };
+    {
+        if std::is_x86_feature_detected!("avx512bw") && std::is_x86_feature_detected!("avx512vnni") {
+            // SAFETY: the CPU has every feature the function enables.
+            unsafe { x86::row_avx512_vnni(q, train, out) };
+            return;
+        }
+        if std::is_x86_feature_detected!("avx512bw") {
+            // SAFETY: as above.
+            unsafe { x86::row_avx512(q, train, out) };
+            return;
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: as above.
+            unsafe { x86::row_avx2(q, train, out) };
+            return;
+        }
+    }
+    #[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+    {
+        wasm::row_simd128(q, train, out);
         return;
     }
-    distance_row_generic(q, train, out);
+    #[allow(unreachable_code)]
+    row_generic(q, train, out)
 }
 
-#[inline(always)]
-fn distance_row_generic(q: &[u8; 128], train: &[[u8; 128]], out: &mut Vec<f32>) {
-    out.extend(train.iter().map(|t| distance(q, t)));
+/// The portable kernel (auto-vectorised where the target allows).
+fn row_generic(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
+    for (o, t) in out.iter_mut().zip(train) {
+        *o = distance(q, t);
+    }
 }
 
-// The same loop compiled with AVX2 so the 128 squared differences vectorise
-// to 16-bit multiply-adds (vpmaddwd), chosen at run time.
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn distance_row_avx2(q: &[u8; 128], train: &[[u8; 128]], out: &mut Vec<f32>) {
-    distance_row_generic(q, train, out)
+mod x86 {
+    use std::arch::x86_64::*;
+
+    /// The sums of the four i32 vectors' lanes, as lanes 0..3.
+    ///
+    /// Interleaving pairs of vectors and adding halves the lane count per
+    /// step without a horizontal add: after the two unpack levels each 128-bit
+    /// lane holds [a, b, c, d] partial sums, and the 128-bit lanes are then
+    /// folded together.
+    #[inline]
+    #[target_feature(enable = "avx512bw")]
+    unsafe fn hsum4_512(a: __m512i, b: __m512i, c: __m512i, d: __m512i) -> __m128i {
+        let ab = _mm512_add_epi32(_mm512_unpacklo_epi32(a, b), _mm512_unpackhi_epi32(a, b));
+        let cd = _mm512_add_epi32(_mm512_unpacklo_epi32(c, d), _mm512_unpackhi_epi32(c, d));
+        let s = _mm512_add_epi32(_mm512_unpacklo_epi64(ab, cd), _mm512_unpackhi_epi64(ab, cd));
+        let y = _mm256_add_epi32(_mm512_castsi512_si256(s), _mm512_extracti64x4_epi64::<1>(s));
+        _mm_add_epi32(_mm256_castsi256_si128(y), _mm256_extracti128_si256::<1>(y))
+    }
+
+    /// 32 bytes at `p` zero-extended to 32 i16.
+    #[inline]
+    #[target_feature(enable = "avx512bw")]
+    unsafe fn load_u8x32_as_i16(p: *const u8) -> __m512i {
+        _mm512_cvtepu8_epi16(_mm256_loadu_si256(p as *const __m256i))
+    }
+
+    /// One AVX-512 row kernel per way of accumulating `d * d` pairs: the
+    /// query stays in four registers as i16, each train row is four loads.
+    macro_rules! avx512_row_kernel {
+        ($(#[$doc:meta])* $name:ident, $features:literal, |$acc:ident, $d:ident| $mac:expr) => {
+            $(#[$doc])*
+            #[target_feature(enable = $features)]
+            pub(super) unsafe fn $name(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
+                let qp = q.as_ptr();
+                let qv = [
+                    load_u8x32_as_i16(qp),
+                    load_u8x32_as_i16(qp.add(32)),
+                    load_u8x32_as_i16(qp.add(64)),
+                    load_u8x32_as_i16(qp.add(96)),
+                ];
+                // The 16 i32 lanes of partial sums of one row.
+                let row = |t: &[u8; 128]| -> __m512i {
+                    let tp = t.as_ptr();
+                    let mut $acc = _mm512_setzero_si512();
+                    for (k, &qk) in qv.iter().enumerate() {
+                        let $d = _mm512_sub_epi16(qk, load_u8x32_as_i16(tp.add(32 * k)));
+                        $acc = $mac;
+                    }
+                    $acc
+                };
+                let mut t4 = train.chunks_exact(4);
+                let mut o4 = out.chunks_exact_mut(4);
+                for (t, o) in (&mut t4).zip(&mut o4) {
+                    let s = hsum4_512(row(&t[0]), row(&t[1]), row(&t[2]), row(&t[3]));
+                    _mm_storeu_ps(o.as_mut_ptr(), _mm_sqrt_ps(_mm_cvtepi32_ps(s)));
+                }
+                super::row_generic(q, t4.remainder(), o4.into_remainder());
+            }
+        };
+    }
+
+    avx512_row_kernel!(
+        /// AVX-512BW + VNNI: `vpdpwssd` squares, pairs and accumulates in one
+        /// instruction.
+        row_avx512_vnni,
+        "avx512bw,avx512vnni",
+        |acc, d| dpwssd(acc, d, d)
+    );
+
+    /// `acc + pairwise sums of a * b` (i16 -> i32) as one `vpdpwssd`. Written
+    /// as asm because LLVM turns `_mm512_dpwssd_epi32` back into `vpmaddwd` +
+    /// `vpaddd` here, one more uop per 32 bytes in the hottest loop.
+    #[inline]
+    #[target_feature(enable = "avx512bw,avx512vnni")]
+    unsafe fn dpwssd(mut acc: __m512i, a: __m512i, b: __m512i) -> __m512i {
+        std::arch::asm!(
+            "vpdpwssd {acc}, {a}, {b}",
+            acc = inout(zmm_reg) acc,
+            a = in(zmm_reg) a,
+            b = in(zmm_reg) b,
+            options(pure, nomem, nostack, preserves_flags),
+        );
+        acc
+    }
+
+    avx512_row_kernel!(
+        /// AVX-512BW without VNNI: `vpmaddwd` then `vpaddd`.
+        row_avx512,
+        "avx512bw",
+        |acc, d| _mm512_add_epi32(acc, _mm512_madd_epi16(d, d))
+    );
+
+
+    /// [`hsum4_512`] for 256-bit vectors.
+    #[inline]
+    #[target_feature(enable = "avx2")]
+    unsafe fn hsum4_256(a: __m256i, b: __m256i, c: __m256i, d: __m256i) -> __m128i {
+        let ab = _mm256_add_epi32(_mm256_unpacklo_epi32(a, b), _mm256_unpackhi_epi32(a, b));
+        let cd = _mm256_add_epi32(_mm256_unpacklo_epi32(c, d), _mm256_unpackhi_epi32(c, d));
+        let s = _mm256_add_epi32(_mm256_unpacklo_epi64(ab, cd), _mm256_unpackhi_epi64(ab, cd));
+        _mm_add_epi32(_mm256_castsi256_si128(s), _mm256_extracti128_si256::<1>(s))
+    }
+
+    /// AVX2: the query in eight registers as i16, `vpmaddwd` + `vpaddd`.
+    #[target_feature(enable = "avx2")]
+    pub(super) unsafe fn row_avx2(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
+        let ld = |p: *const u8| _mm256_cvtepu8_epi16(_mm_loadu_si128(p as *const __m128i));
+        let qp = q.as_ptr();
+        let qv: [__m256i; 8] = std::array::from_fn(|k| ld(qp.add(16 * k)));
+        let row = |t: &[u8; 128]| -> __m256i {
+            let tp = t.as_ptr();
+            let mut acc = _mm256_setzero_si256();
+            for (k, &qk) in qv.iter().enumerate() {
+                let d = _mm256_sub_epi16(qk, ld(tp.add(16 * k)));
+                acc = _mm256_add_epi32(acc, _mm256_madd_epi16(d, d));
+            }
+            acc
+        };
+        let mut t4 = train.chunks_exact(4);
+        let mut o4 = out.chunks_exact_mut(4);
+        for (t, o) in (&mut t4).zip(&mut o4) {
+            let s = hsum4_256(row(&t[0]), row(&t[1]), row(&t[2]), row(&t[3]));
+            _mm_storeu_ps(o.as_mut_ptr(), _mm_sqrt_ps(_mm_cvtepi32_ps(s)));
+        }
+        super::row_generic(q, t4.remainder(), o4.into_remainder());
+    }
+}
+
+#[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+mod wasm {
+    use core::arch::wasm32::*;
+
+    /// Bytes `16k .. 16k + 16` of a descriptor, `k < 8`.
+    #[inline(always)]
+    fn load(d: &[u8; 128], k: usize) -> v128 {
+        debug_assert!(k < 8);
+        // SAFETY: 16 * k + 16 <= 128 bytes of `d` are readable; wasm loads
+        // need no alignment.
+        unsafe { v128_load(d.as_ptr().add(16 * k) as *const v128) }
+    }
+
+    /// simd128: the query as sixteen i16x8 vectors, `i32x4.dot_i16x8_s`
+    /// squares and pairs the differences.
+    pub(super) fn row_simd128(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
+        let qv: [v128; 16] = std::array::from_fn(|k| {
+            let b = load(q, k / 2);
+            if k % 2 == 0 {
+                u16x8_extend_low_u8x16(b)
+            } else {
+                u16x8_extend_high_u8x16(b)
+            }
+        });
+        let row = |t: &[u8; 128]| -> v128 {
+            let mut acc = i32x4_splat(0);
+            for k in 0..8 {
+                let b = load(t, k);
+                let lo = i16x8_sub(qv[2 * k], u16x8_extend_low_u8x16(b));
+                let hi = i16x8_sub(qv[2 * k + 1], u16x8_extend_high_u8x16(b));
+                acc = i32x4_add(acc, i32x4_add(i32x4_dot_i16x8(lo, lo), i32x4_dot_i16x8(hi, hi)));
+            }
+            acc
+        };
+        let mut t4 = train.chunks_exact(4);
+        let mut o4 = out.chunks_exact_mut(4);
+        for (t, o) in (&mut t4).zip(&mut o4) {
+            let (a, b, c, d) = (row(&t[0]), row(&t[1]), row(&t[2]), row(&t[3]));
+            // The same two interleave-and-add levels as the x86 reduction.
+            let ab = i32x4_add(i32x4_shuffle::<0, 4, 1, 5>(a, b), i32x4_shuffle::<2, 6, 3, 7>(a, b));
+            let cd = i32x4_add(i32x4_shuffle::<0, 4, 1, 5>(c, d), i32x4_shuffle::<2, 6, 3, 7>(c, d));
+            let s = i32x4_add(i64x2_shuffle::<0, 2>(ab, cd), i64x2_shuffle::<1, 3>(ab, cd));
+            let r = f32x4_sqrt(f32x4_convert_i32x4(s));
+            o[0] = f32x4_extract_lane::<0>(r);
+            o[1] = f32x4_extract_lane::<1>(r);
+            o[2] = f32x4_extract_lane::<2>(r);
+            o[3] = f32x4_extract_lane::<3>(r);
+        }
+        super::row_generic(q, t4.remainder(), o4.into_remainder());
+    }
 }
 
 #[cfg(test)]
@@ -63,5 +274,112 @@ mod tests {
         distance_row(&a, &[a, b, [255; 128]], &mut row);
         assert_eq!(row, vec![0.0, 5.0, 8_323_200f32.sqrt()]);
         assert_eq!(row[2], 2884.9956);
+    }
+
+    /// Deterministic pseudo-random descriptors (xorshift64).
+    fn random_descriptors(n: usize, seed: u64) -> Vec<[u8; 128]> {
+        let mut s = seed;
+        (0..n)
+            .map(|_| {
+                std::array::from_fn(|_| {
+                    s ^= s << 13;
+                    s ^= s >> 7;
+                    s ^= s << 17;
+                    (s >> 32) as u8
+                })
+            })
+            .collect()
+    }
+
+    /// Descriptors at the edges of the range: all 0, all 255, one byte
+    /// differing at every position, 0/255 alternating both ways.
+    fn extreme_descriptors() -> Vec<[u8; 128]> {
+        let mut v = vec![[0u8; 128], [255u8; 128]];
+        for i in 0..128 {
+            let mut a = [0u8; 128];
+            a[i] = 255;
+            v.push(a);
+            let mut b = [255u8; 128];
+            b[i] = 0;
+            v.push(b);
+            let mut c = [7u8; 128];
+            c[i] = 8;
+            v.push(c);
+        }
+        v.push(std::array::from_fn(|i| if i % 2 == 0 { 0 } else { 255 }));
+        v.push(std::array::from_fn(|i| if i % 2 == 0 { 255 } else { 0 }));
+        v
+    }
+
+    type Kernel = fn(&[u8; 128], &[[u8; 128]], &mut [f32]);
+
+    /// Every kernel this machine can run, by name (plus the dispatcher).
+    fn kernels() -> Vec<(&'static str, Kernel)> {
+        let mut k: Vec<(&'static str, Kernel)> = vec![("generic", row_generic), ("dispatch", distance_row_into)];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::is_x86_feature_detected!("avx2") {
+                // SAFETY (all three): only registered when the CPU has the features.
+                k.push(("avx2", |q, t, o| unsafe { x86::row_avx2(q, t, o) }));
+            }
+            if std::is_x86_feature_detected!("avx512bw") {
+                k.push(("avx512bw", |q, t, o| unsafe { x86::row_avx512(q, t, o) }));
+                if std::is_x86_feature_detected!("avx512vnni") {
+                    k.push(("avx512vnni", |q, t, o| unsafe { x86::row_avx512_vnni(q, t, o) }));
+                }
+            }
+        }
+        #[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+        k.push(("simd128", wasm::row_simd128));
+        k
+    }
+
+    /// Each kernel against the scalar `distance_sq`, bit for bit, for every
+    /// query against train sets of every length mod 4 (the remainder path).
+    fn check_all_kernels(queries: &[[u8; 128]], train: &[[u8; 128]]) {
+        for (name, kernel) in kernels() {
+            for len in [0, 1, 2, 3, 4, 5, 6, 7, train.len()] {
+                let t = &train[..len.min(train.len())];
+                for q in queries {
+                    let mut out = vec![-1.0f32; t.len()];
+                    kernel(q, t, &mut out);
+                    for (j, (o, tj)) in out.iter().zip(t).enumerate() {
+                        let want = (distance_sq(q, tj) as f32).sqrt();
+                        assert_eq!(o.to_bits(), want.to_bits(), "{name}: train {j} of {len}");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn kernels_match_scalar_on_random_descriptors() {
+        let q = random_descriptors(17, 0x9e37_79b9_7f4a_7c15);
+        let t = random_descriptors(203, 0x2545_f491_4f6c_dd1d);
+        check_all_kernels(&q, &t);
+    }
+
+    #[test]
+    fn kernels_match_scalar_on_extreme_descriptors() {
+        let e = extreme_descriptors();
+        check_all_kernels(&e, &e);
+        // The largest possible sum, 128 * 255^2, through every kernel.
+        for (name, kernel) in kernels() {
+            let mut out = [0.0f32; 5];
+            kernel(&[0; 128], &[[255; 128]; 5], &mut out);
+            assert!(out.iter().all(|&d| d == 8_323_200f32.sqrt()), "{name}: {out:?}");
+            kernel(&[255; 128], &[[255; 128]; 5], &mut out);
+            assert!(out.iter().all(|&d| d == 0.0), "{name}: {out:?}");
+        }
+    }
+
+    #[test]
+    fn row_into_leaves_extra_outputs() {
+        let t = random_descriptors(6, 3);
+        let mut out = [-1.0f32; 8];
+        distance_row_into(&t[0], &t, &mut out);
+        assert_eq!(out[0], 0.0);
+        assert_eq!(&out[6..], &[-1.0, -1.0]);
+        assert_eq!(out[5], distance(&t[0], &t[5]));
     }
 }
