@@ -1,6 +1,6 @@
 //! `BFMatcher().knnMatch(query, train, k)` (spec §16).
 
-use super::distance::distance_row;
+use super::distance::{distance_rows, TrainSet};
 
 /// One `cv2.DMatch` (imgIdx is always 0 and omitted).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -82,15 +82,20 @@ pub fn ranked_row(query_idx: usize, row: &[f32]) -> Vec<DMatch> {
 
 /// `knnMatch(query, train, k)` for every query row.
 pub fn knn_match(query: &[[u8; 128]], train: &[[u8; 128]], k: usize) -> Vec<Vec<DMatch>> {
-    let mut row = Vec::new();
-    query
-        .iter()
-        .enumerate()
-        .map(|(i, q)| {
-            distance_row(q, train, &mut row);
-            knn_row(i, &row, k)
-        })
-        .collect()
+    // Blocks of 32 queries through the multi-query kernel: 32 rows of
+    // distances stay in cache until selected.
+    const BLOCK: usize = 32;
+    let nt = train.len();
+    let train = TrainSet::new(train);
+    let mut rows = vec![0.0f32; BLOCK * nt];
+    let mut out = Vec::with_capacity(query.len());
+    for (b, qs) in query.chunks(BLOCK).enumerate() {
+        distance_rows(qs, &train, &mut rows);
+        for i in 0..qs.len() {
+            out.push(knn_row(b * BLOCK + i, &rows[i * nt..(i + 1) * nt], k));
+        }
+    }
+    out
 }
 
 #[cfg(test)]
