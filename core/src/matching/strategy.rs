@@ -159,6 +159,10 @@ pub fn match_feature(s: &Strategy, prev: &Features, cur: &Features, feature: usi
 /// 32 rows of 1500 distances (192 KB) stay in L2 until selected.
 const BLOCK: usize = 32;
 
+/// A block's first query index and its matches, as a worker returns them.
+#[cfg(not(target_arch = "wasm32"))]
+type Block = (usize, Vec<Vec<DMatch>>);
+
 /// The strategy applied to every query descriptor (what the lab's `dt`,
 /// `nn` and `nndr` functions return), rows computed in parallel natively.
 pub fn match_all(s: &Strategy, prev: &Features, cur: &Features) -> Result<Vec<Vec<DMatch>>> {
@@ -194,7 +198,7 @@ pub fn match_all(s: &Strategy, prev: &Features, cur: &Features) -> Result<Vec<Ve
             // rows is a few hundred microseconds, so the counter is not
             // contended.
             let next = AtomicUsize::new(0);
-            let worker = || -> Result<Vec<(usize, Vec<Vec<DMatch>>)>> {
+            let worker = || -> Result<Vec<Block>> {
                 let mut row = Vec::new();
                 let mut done = Vec::new();
                 loop {
@@ -205,7 +209,7 @@ pub fn match_all(s: &Strategy, prev: &Features, cur: &Features) -> Result<Vec<Ve
                     done.push((start, run(start..(start + BLOCK).min(n), &mut row)?));
                 }
             };
-            let parts: Vec<Result<Vec<(usize, Vec<Vec<DMatch>>)>>> = std::thread::scope(|sc| {
+            let parts: Vec<Result<Vec<Block>>> = std::thread::scope(|sc| {
                 let hs: Vec<_> = (1..threads).map(|_| sc.spawn(worker)).collect();
                 // This thread takes blocks too instead of only waiting.
                 let mut parts = vec![worker()];
@@ -237,7 +241,7 @@ mod tests {
             .map(|_| {
                 std::array::from_fn(|_| {
                     s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-                    [0u8, 1, 255][(s >> 30) as usize % 3] & if (s >> 8) % 16 == 0 { 255 } else { 0 }
+                    [0u8, 1, 255][(s >> 30) as usize % 3] & if (s >> 8).is_multiple_of(16) { 255 } else { 0 }
                 })
             })
             .collect();
