@@ -1,6 +1,6 @@
 //! `BFMatcher().knnMatch(query, train, k)` (spec §16).
 
-use super::distance::distance_row;
+use super::distance::{distance_rows, TrainSet};
 
 /// One `cv2.DMatch` (imgIdx is always 0 and omitted).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -16,19 +16,58 @@ pub struct DMatch {
 /// after equal distances, which is a stable selection by (distance, index).
 pub fn knn_row(query_idx: usize, row: &[f32], k: usize) -> Vec<DMatch> {
     let k = k.min(row.len());
-    if k == 0 {
-        return Vec::new();
+    let m = |(train_idx, distance): (usize, f32)| DMatch { query_idx, train_idx, distance };
+    match k {
+        0 => Vec::new(),
+        // nn and nndr (and knnMatch k = 2) only need the best two: a scan
+        // with two registers instead of the general insertion below.
+        1 => vec![m(best2(row)[0])],
+        2 => best2(row).into_iter().map(m).collect(),
+        _ => {
+            let mut best: Vec<DMatch> = Vec::with_capacity(k + 1);
+            for (j, &d) in row.iter().enumerate() {
+                if best.len() == k && !(d < best[k - 1].distance) {
+                    continue;
+                }
+                let pos = best.partition_point(|m| m.distance <= d);
+                best.insert(pos, DMatch { query_idx, train_idx: j, distance: d });
+                best.truncate(k);
+            }
+            best
+        }
     }
-    let mut best: Vec<DMatch> = Vec::with_capacity(k + 1);
-    for (j, &d) in row.iter().enumerate() {
-        if best.len() == k && !(d < best[k - 1].distance) {
+}
+
+/// The two nearest (train index, distance) of a row of >= 2 finite
+/// distances, by the same rule as [`knn_row`]: a candidate replaces a slot
+/// only if strictly closer, so the lower index wins ties. The +inf start
+/// values are beaten by the first two entries (distances are at most
+/// sqrt(128 * 255^2)), which is how a not-yet-full list accepts anything.
+/// With a single entry the second slot stays (usize::MAX, inf): callers
+/// keep only the first.
+#[inline]
+fn best2(row: &[f32]) -> [(usize, f32); 2] {
+    let (mut j1, mut d1, mut j2, mut d2) = (usize::MAX, f32::INFINITY, usize::MAX, f32::INFINITY);
+    const CHUNK: usize = 16;
+    for (c, chunk) in row.chunks(CHUNK).enumerate() {
+        // After the first few rows almost no distance beats the current
+        // second best: one branch-free (vectorised) test per chunk skips those
+        // chunks, and the exact scan below runs only on the rest.
+        if !chunk.iter().fold(false, |any, &d| any | (d < d2)) {
             continue;
         }
-        let pos = best.partition_point(|m| m.distance <= d);
-        best.insert(pos, DMatch { query_idx, train_idx: j, distance: d });
-        best.truncate(k);
+        for (j, &d) in (c * CHUNK..).zip(chunk) {
+            if d < d2 {
+                if d < d1 {
+                    (j2, d2) = (j1, d1);
+                    (j1, d1) = (j, d);
+                } else {
+                    (j2, d2) = (j, d);
+                }
+            }
+        }
     }
-    best
+    [(j1, d1), (j2, d2)]
 }
 
 /// Every train descriptor of one query, in the order knnMatch with
@@ -43,15 +82,20 @@ pub fn ranked_row(query_idx: usize, row: &[f32]) -> Vec<DMatch> {
 
 /// `knnMatch(query, train, k)` for every query row.
 pub fn knn_match(query: &[[u8; 128]], train: &[[u8; 128]], k: usize) -> Vec<Vec<DMatch>> {
-    let mut row = Vec::new();
-    query
-        .iter()
-        .enumerate()
-        .map(|(i, q)| {
-            distance_row(q, train, &mut row);
-            knn_row(i, &row, k)
-        })
-        .collect()
+    // Blocks of 32 queries through the multi-query kernel: 32 rows of
+    // distances stay in cache until selected.
+    const BLOCK: usize = 32;
+    let nt = train.len();
+    let train = TrainSet::new(train);
+    let mut rows = vec![0.0f32; BLOCK * nt];
+    let mut out = Vec::with_capacity(query.len());
+    for (b, qs) in query.chunks(BLOCK).enumerate() {
+        distance_rows(qs, &train, &mut rows);
+        for i in 0..qs.len() {
+            out.push(knn_row(b * BLOCK + i, &rows[i * nt..(i + 1) * nt], k));
+        }
+    }
+    out
 }
 
 #[cfg(test)]
@@ -69,6 +113,35 @@ mod tests {
         assert!(knn_row(0, &[], 2).is_empty());
         let r = ranked_row(0, &row);
         assert_eq!(r.iter().map(|m| m.train_idx).collect::<Vec<_>>(), vec![3, 1, 4, 0, 2]);
+    }
+
+    /// The general insertion of `knn_row`, for any k (the reference for the
+    /// k <= 2 fast path).
+    fn knn_row_by_insertion(row: &[f32], k: usize) -> Vec<(usize, f32)> {
+        let mut all: Vec<(usize, f32)> = row.iter().copied().enumerate().collect();
+        all.sort_by(|a, b| a.1.total_cmp(&b.1));
+        all.truncate(k);
+        all
+    }
+
+    #[test]
+    fn best_two_scan_equals_stable_sort_with_ties() {
+        let mut s = 12345u32;
+        for n in 0..40 {
+            for _ in 0..50 {
+                // Few distinct values so ties (and ties at the front) are common.
+                let row: Vec<f32> = (0..n)
+                    .map(|_| {
+                        s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                        ((s >> 28) % 5) as f32
+                    })
+                    .collect();
+                for k in 1..=3 {
+                    let got: Vec<(usize, f32)> = knn_row(3, &row, k).iter().map(|m| (m.train_idx, m.distance)).collect();
+                    assert_eq!(got, knn_row_by_insertion(&row, k), "row {row:?} k {k}");
+                }
+            }
+        }
     }
 
     #[test]
