@@ -44,7 +44,7 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
     let exp_scale = -1.0 / ((D * D) as f32 * 0.5);
     let hist_width = SCL_FCTR * scl;
     let (rows, cols) = (img.height as i64, img.width as i64);
-    let mut radius = rne(((hist_width * 1.4142135623730951f32) * (D + 1) as f32) * 0.5) as i64;
+    let mut radius = rne(((hist_width * std::f32::consts::SQRT_2) * (D + 1) as f32) * 0.5) as i64;
     let diag = ((cols * cols + rows * rows) as f64).sqrt() as i64;
     radius = radius.min(diag);
     cos_t /= hist_width;
