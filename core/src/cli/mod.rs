@@ -82,6 +82,10 @@ pub struct SiftArgs {
     /// Print keypoints and descriptors as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Time detect+compute this many times and report the best and the mean
+    /// (for benchmarks: tests/scripts/bench_interleaved.py).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeat: u32,
 }
 
 /// Runs the CLI; returns the process exit code.
@@ -253,14 +257,22 @@ fn run_sift(cli: &Cli, a: &SiftArgs) -> Result<()> {
     })?;
     let img = GrayImage::decode(&bytes)?;
     let params = sift_params(cli);
-    let t0 = std::time::Instant::now();
-    let f = detect_and_compute(&img, &params);
-    let ms = t0.elapsed().as_secs_f64() * 1e3;
+    let mut times = Vec::with_capacity(a.repeat as usize);
+    let mut f = Features::default();
+    for _ in 0..a.repeat {
+        let t0 = std::time::Instant::now();
+        f = detect_and_compute(&img, &params);
+        times.push(t0.elapsed().as_secs_f64() * 1e3);
+    }
+    let best = times.iter().copied().fold(f64::INFINITY, f64::min);
     let mut out = std::io::BufWriter::new(std::io::stdout().lock());
     if a.json {
         write_json(&mut out, &img, &f).map_err(|e| Error::Dataset(format!("cannot write output: {e}")))?;
+    } else if times.len() == 1 {
+        let _ = writeln!(out, "{} keypoints in {best:.1} ms", f.keypoints.len());
     } else {
-        let _ = writeln!(out, "{} keypoints in {ms:.1} ms", f.keypoints.len());
+        let mean = times.iter().sum::<f64>() / times.len() as f64;
+        let _ = writeln!(out, "{} keypoints in {best:.1} ms (best of {}; mean {mean:.1} ms)", f.keypoints.len(), times.len());
     }
     let _ = out.flush();
     Ok(())
