@@ -48,20 +48,7 @@ fn reflect101(mut p: isize, len: usize) -> usize {
 
 /// GaussianBlur(src, σ) with the same σ in x and y.
 pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
-    let (w, h) = (src.width, src.height);
-    if w == 0 || h == 0 {
-        return src.clone();
-    }
-    let kernel = gaussian_kernel(sigma);
-    // A single row or column gets a size-1 kernel on that axis (OpenCV's
-    // createGaussianKernels special case).
-    let kx: Vec<f32> = if w == 1 { vec![1.0] } else { kernel.clone() };
-    let ky: Vec<f32> = if h == 1 { vec![1.0] } else { kernel };
-    if kx.len() == 1 && ky.len() == 1 {
-        return src.clone();
-    }
-    let rows = row_pass(src, &kx);
-    column_pass(&rows, &ky, None).0
+    blur(src, sigma, false).0
 }
 
 /// GaussianBlur(src, σ) and the difference blur − src (the DoG level SIFT
@@ -69,90 +56,116 @@ pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
 /// rather than in a second pass over both planes. Same values as
 /// [`gaussian_blur`] followed by a plain f32 subtraction.
 pub fn gaussian_blur_and_difference(src: &Plane, sigma: f64) -> (Plane, Plane) {
+    let (blurred, diff) = blur(src, sigma, true);
+    let diff = diff.unwrap_or_else(|| Plane::new(src.width, src.height));
+    (blurred, diff)
+}
+
+fn blur(src: &Plane, sigma: f64, with_diff: bool) -> (Plane, Option<Plane>) {
     let (w, h) = (src.width, src.height);
-    if w <= 1 || h <= 1 {
-        // The size-1 kernel cases of the top octaves: tiny, done plainly.
-        let blurred = gaussian_blur(src, sigma);
-        let mut diff = Plane::for_overwrite(w, h);
-        for ((d, &b), &a) in diff.data.iter_mut().zip(&blurred.data).zip(&src.data) {
-            *d = b - a;
-        }
-        return (blurred, diff);
-    }
     let kernel = gaussian_kernel(sigma);
-    let rows = row_pass(src, &kernel);
-    let (blurred, diff) = column_pass(&rows, &kernel, Some(src));
-    (blurred, diff.unwrap_or_else(|| Plane::new(w, h)))
-}
-
-/// Row pass: a plain (non-symmetric) filter accumulated left to right, the
-/// first tap a product and every further tap one FMA — the order of OpenCV's
-/// AVX2 loop and its GCC-contracted scalar tail.
-fn row_pass(src: &Plane, kx: &[f32]) -> Plane {
-    let (w, h) = (src.width, src.height);
-    let ks = kx.len();
-    let r = ks / 2;
+    // A single row or column gets a size-1 kernel on that axis (OpenCV's
+    // createGaussianKernels special case).
+    let kx: Vec<f32> = if w == 1 { vec![1.0] } else { kernel.clone() };
+    let ky: Vec<f32> = if h == 1 { vec![1.0] } else { kernel };
     let mut out = Plane::for_overwrite(w, h);
-    super::par::for_each_chunk(&mut out.data, w, |y0, chunk| {
-        let mut padded = vec![0f32; w + 2 * r];
-        for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
-            let y = y0 + dy;
-            let row = src.row(y);
-            if w > r {
-                padded[r..r + w].copy_from_slice(row);
-                for i in 0..r {
-                    padded[i] = row[reflect101(i as isize - r as isize, w)];
-                    padded[r + w + i] = row[reflect101((w + i) as isize, w)];
-                }
-            } else {
-                for (i, p) in padded.iter_mut().enumerate() {
-                    *p = row[reflect101(i as isize - r as isize, w)];
-                }
+    let mut diff = with_diff.then(|| Plane::for_overwrite(w, h));
+    if w == 0 || h == 0 {
+        return (out, diff);
+    }
+    if kx.len() == 1 && ky.len() == 1 {
+        out.data.copy_from_slice(&src.data);
+        if let Some(d) = diff.as_mut() {
+            for (d, &a) in d.data.iter_mut().zip(&src.data) {
+                *d = a - a;
             }
-            accumulate_row(&padded, kx, dst);
         }
-    });
-    out
-}
-
-/// Column pass: OpenCV's symmetric column filter, centre tap first, then
-/// the pair sums `R[y+k] + R[y-k]` (rounded) fused with `ky[c+k]`.
-fn column_pass(src: &Plane, ky: &[f32], minus: Option<&Plane>) -> (Plane, Option<Plane>) {
-    let (w, h) = (src.width, src.height);
-    let c = ky.len() / 2;
-    let mut out = Plane::for_overwrite(w, h);
-    let mut diff = minus.map(|_| Plane::for_overwrite(w, h));
+        return (out, diff);
+    }
     let diff_data: &mut [f32] = match diff.as_mut() {
         Some(d) => &mut d.data,
         None => &mut [],
     };
+    let minus = with_diff.then_some(src);
     super::par::for_each_chunk_pair(&mut out.data, diff_data, w, |y0, chunk, diff_chunk| {
+        blur_rows(src, &kx, &ky, minus, y0, chunk, diff_chunk);
+    });
+    (out, diff)
+}
+
+/// Output rows `y0..` (as many as `out` holds) of the separable filter, in
+/// bands: the row pass of the band's source rows (its 2c neighbours above
+/// and below included) goes to a buffer that stays in L2, then the column
+/// pass reads it from there. Two passes over a whole intermediate plane
+/// would move 15 MB more per blur of a KITTI first octave through memory,
+/// which bounds this stage on a 2-core machine.
+fn blur_rows(
+    src: &Plane,
+    kx: &[f32],
+    ky: &[f32],
+    minus: Option<&Plane>,
+    y0: usize,
+    out: &mut [f32],
+    diff: &mut [f32],
+) {
+    let (w, h) = (src.width, src.height);
+    let (r, c) = (kx.len() / 2, ky.len() / 2);
+    let n = out.len() / w;
+    let band = (BAND_BYTES / (4 * w)).saturating_sub(2 * c).max(16);
+    let mut buf = vec![0f32; (band.min(n) + 2 * c) * w];
+    let mut padded = vec![0f32; w + 2 * r];
+    for b0 in (0..n).step_by(band) {
+        let b1 = (b0 + band).min(n);
+        let (ya, yb) = ((y0 + b0) as isize, (y0 + b1) as isize);
+        // Buffer row j holds the row pass of source row ya − c + j, reflected
+        // into the image as the column filter's border rule does.
+        for (j, v) in (ya - c as isize..yb + c as isize).enumerate() {
+            row_filter(src.row(reflect101(v, h)), kx, &mut padded, &mut buf[j * w..(j + 1) * w]);
+        }
+        let row = |m: usize, x0: usize, x1: usize| &buf[m * w + x0..m * w + x1];
         let mut pairs: Vec<(&[f32], &[f32])> = Vec::with_capacity(c);
         // Vertical strips narrow enough that the 2c+1 source rows of one
         // output row stay in L1 while the next row reuses 2c of them.
         for x0 in (0..w).step_by(STRIP) {
             let x1 = (x0 + STRIP).min(w);
-            for (dy, dst) in chunk.chunks_exact_mut(w).enumerate() {
-                let y = y0 + dy;
+            for dy in b0..b1 {
+                let m = dy - b0 + c;
                 pairs.clear();
-                pairs.extend((1..=c).map(|k| {
-                    (
-                        &src.row(reflect101(y as isize + k as isize, h))[x0..x1],
-                        &src.row(reflect101(y as isize - k as isize, h))[x0..x1],
-                    )
-                }));
-                let dst = &mut dst[x0..x1];
-                accumulate_column(&src.row(y)[x0..x1], &pairs, &ky[c..], dst);
+                pairs.extend((1..=c).map(|k| (row(m + k, x0, x1), row(m - k, x0, x1))));
+                let dst = &mut out[dy * w + x0..dy * w + x1];
+                accumulate_column(row(m, x0, x1), &pairs, &ky[c..], dst);
                 if let Some(minus) = minus {
-                    let d = &mut diff_chunk[dy * w + x0..dy * w + x1];
-                    for ((d, &b), &a) in d.iter_mut().zip(dst.iter()).zip(&minus.row(y)[x0..x1]) {
+                    let d = &mut diff[dy * w + x0..dy * w + x1];
+                    for ((d, &b), &a) in d.iter_mut().zip(dst.iter()).zip(&minus.row(y0 + dy)[x0..x1]) {
                         *d = b - a;
                     }
                 }
             }
         }
-    });
-    (out, diff)
+    }
+}
+
+/// Bytes of row-pass buffer per band (a share of a 2 MB L2).
+const BAND_BYTES: usize = 1_500_000;
+
+/// Row filter of one row: a plain (non-symmetric) filter accumulated left to
+/// right, the first tap a product and every further tap one FMA — the order
+/// of OpenCV's AVX2 loop and its GCC-contracted scalar tail — over the row
+/// extended by BORDER_REFLECT_101.
+fn row_filter(row: &[f32], kx: &[f32], padded: &mut [f32], dst: &mut [f32]) {
+    let (w, r) = (row.len(), kx.len() / 2);
+    if w > r {
+        padded[r..r + w].copy_from_slice(row);
+        for i in 0..r {
+            padded[i] = row[reflect101(i as isize - r as isize, w)];
+            padded[r + w + i] = row[reflect101((w + i) as isize, w)];
+        }
+    } else {
+        for (i, p) in padded.iter_mut().enumerate() {
+            *p = row[reflect101(i as isize - r as isize, w)];
+        }
+    }
+    accumulate_row(padded, kx, dst);
 }
 
 /// Columns per strip of the column pass (1 KB of each row).
