@@ -132,17 +132,40 @@ fn blur_rows(
                 let m = dy - b0 + c;
                 pairs.clear();
                 pairs.extend((1..=c).map(|k| (row(m + k, x0, x1), row(m - k, x0, x1))));
-                let dst = &mut out[dy * w + x0..dy * w + x1];
-                accumulate_column(row(m, x0, x1), &pairs, &ky[c..], dst);
-                if let Some(minus) = minus {
-                    let d = &mut diff[dy * w + x0..dy * w + x1];
-                    for ((d, &b), &a) in d.iter_mut().zip(dst.iter()).zip(&minus.row(y0 + dy)[x0..x1]) {
-                        *d = b - a;
-                    }
-                }
+                accumulate_column(row(m, x0, x1), &pairs, &ky[c..], &mut out[dy * w + x0..dy * w + x1]);
+            }
+        }
+        // Whole rows, so the subtrahend streams in order (a strip at a time
+        // it would be a new page every row).
+        if let Some(minus) = minus {
+            for dy in b0..b1 {
+                let rows = (&out[dy * w..(dy + 1) * w], minus.row(y0 + dy));
+                subtract(rows.0, rows.1, &mut diff[dy * w..(dy + 1) * w]);
             }
         }
     }
+}
+
+/// `d = b − a`, element by element (plain f32 subtraction).
+fn subtract(b: &[f32], a: &[f32], d: &mut [f32]) {
+    #[inline(always)]
+    fn body(b: &[f32], a: &[f32], d: &mut [f32]) {
+        for ((d, &b), &a) in d.iter_mut().zip(b).zip(a) {
+            *d = b - a;
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx2(b: &[f32], a: &[f32], d: &mut [f32]) {
+            body(b, a, d)
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, the only feature `avx2` enables.
+            return unsafe { avx2(b, a, d) };
+        }
+    }
+    body(b, a, d)
 }
 
 /// Bytes of row-pass buffer per band (a share of a 2 MB L2).

@@ -65,7 +65,10 @@ impl Clone for Plane {
 // cost a fifth of the run; the video loop and the app run SIFT frame after
 // frame (the video loop on a new thread each time), so a freed plane's
 // buffer is kept for the next one instead, in one process-wide set.
-const MAX_SPARE_BUFFERS: usize = 48;
+// One KITTI frame frees 66 buffers of 4096 floats or more (octaves 0–5:
+// 6 Gaussian and 5 DoG levels each, 77 MB); keep a frame's worth.
+const MAX_SPARE_BUFFERS: usize = 160;
+const MAX_SPARE_FLOATS: usize = 64 << 20; // 256 MB
 
 static SPARE: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
 
@@ -90,7 +93,8 @@ impl Drop for Plane {
             return;
         }
         if let Ok(mut spare) = SPARE.lock() {
-            if spare.len() < MAX_SPARE_BUFFERS {
+            let held: usize = spare.iter().map(Vec::capacity).sum();
+            if spare.len() < MAX_SPARE_BUFFERS && held + self.data.capacity() <= MAX_SPARE_FLOATS {
                 spare.push(std::mem::take(&mut self.data));
             }
         }
