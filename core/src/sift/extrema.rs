@@ -38,6 +38,7 @@ pub fn scan_layer(
         return;
     }
     let mut candidates = Vec::new();
+    let mut scratch = ColumnExtremes::default();
     for r in r_start..r_end {
         let rows = [
             prev.row(r - 1), prev.row(r), prev.row(r + 1),
@@ -45,7 +46,7 @@ pub fn scan_layer(
             next.row(r - 1), next.row(r), next.row(r + 1),
         ];
         candidates.clear();
-        row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates);
+        row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates, &mut scratch);
         for &c in &candidates {
             if let Some(refined) = adjust_local_extremum(dog, o, layer, r, c, p) {
                 push_oriented(gauss, refined, p, out);
@@ -117,46 +118,50 @@ mod x86 {
     use std::arch::x86_64::*;
 
     /// Returns the first column not examined (the scalar tail starts there).
-    /// Needs every row to extend one pixel past `cols.end`.
+    /// Needs every row to extend one pixel past `cols.end` and `cols.start >= 1`.
+    ///
+    /// v ≥ all 26 neighbours ⟺ v ≥ the maximum of the 3×3×3 block (v itself
+    /// included), and that maximum is separable: first per column over the
+    /// nine rows (three layers × three rows), then over three columns. That
+    /// is 10 max and 10 min per pixel instead of 26 of each.
     #[target_feature(enable = "avx512f")]
-    pub unsafe fn row_extrema_avx512(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>) -> usize {
+    pub unsafe fn row_extrema_avx512(
+        rows: &[&[f32]; 9],
+        thr: f32,
+        cols: std::ops::Range<usize>,
+        out: &mut Vec<usize>,
+        col_max: &mut Vec<f32>,
+        col_min: &mut Vec<f32>,
+    ) -> usize {
         let p: [*const f32; 9] = std::array::from_fn(|i| rows[i].as_ptr());
+        let w = cols.end + 1;
+        col_max.resize(w + 16, 0.0);
+        col_min.resize(w + 16, 0.0);
+        let (cmax, cmin) = (col_max.as_mut_ptr(), col_min.as_mut_ptr());
+        let mut x = cols.start - 1;
+        while x < w {
+            let valid: __mmask16 = if w - x >= 16 { 0xFFFF } else { (1u16 << (w - x)) - 1 };
+            let first = _mm512_maskz_loadu_ps(valid, p[0].add(x));
+            let (mut mx, mut mn) = (first, first);
+            for &row in &p[1..] {
+                let s = _mm512_maskz_loadu_ps(valid, row.add(x));
+                mx = _mm512_max_ps(mx, s);
+                mn = _mm512_min_ps(mn, s);
+            }
+            _mm512_mask_storeu_ps(cmax.add(x), valid, mx);
+            _mm512_mask_storeu_ps(cmin.add(x), valid, mn);
+            x += 16;
+        }
         let (hi, lo) = (_mm512_set1_ps(thr), _mm512_set1_ps(-thr));
         let mut x = cols.start;
         while x + 16 <= cols.end {
             let v = _mm512_loadu_ps(p[4].add(x));
             let (pos, neg) = (_mm512_cmp_ps_mask::<_CMP_GT_OQ>(v, hi), _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, lo));
-            let layer = |(mut pos, mut neg): (u16, u16), ps: [usize; 3], skip_centre: bool| {
-                let (mut mx, mut mn) = (_mm512_set1_ps(f32::NEG_INFINITY), _mm512_set1_ps(f32::INFINITY));
-                for (i, &r) in ps.iter().enumerate() {
-                    for d in 0..3 {
-                        if skip_centre && i == 1 && d == 1 {
-                            continue;
-                        }
-                        let s = _mm512_loadu_ps(p[r].add(x + d - 1));
-                        mx = _mm512_max_ps(mx, s);
-                        mn = _mm512_min_ps(mn, s);
-                    }
-                }
-                pos &= _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, mx);
-                neg &= _mm512_cmp_ps_mask::<_CMP_LE_OQ>(v, mn);
-                (pos, neg)
-            };
-            let live = |(pos, neg): (u16, u16)| pos | neg != 0;
-            let m = (pos, neg);
-            if !live(m) {
-                x += 16;
-                continue;
-            }
-            let m = layer(m, [3, 4, 5], true);
-            if !live(m) {
-                x += 16;
-                continue;
-            }
-            let m = layer(m, [0, 1, 2], false);
-            if live(m) {
-                let (pos, neg) = layer(m, [6, 7, 8], false);
-                let mut mask = (pos | neg) as u32;
+            if pos | neg != 0 {
+                let mx = _mm512_max_ps(_mm512_max_ps(_mm512_loadu_ps(cmax.add(x - 1)), _mm512_loadu_ps(cmax.add(x))), _mm512_loadu_ps(cmax.add(x + 1)));
+                let mn = _mm512_min_ps(_mm512_min_ps(_mm512_loadu_ps(cmin.add(x - 1)), _mm512_loadu_ps(cmin.add(x))), _mm512_loadu_ps(cmin.add(x + 1)));
+                let hit = (pos & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, mx)) | (neg & _mm512_cmp_ps_mask::<_CMP_LE_OQ>(v, mn));
+                let mut mask = hit as u32;
                 while mask != 0 {
                     out.push(x + mask.trailing_zeros() as usize);
                     mask &= mask - 1;
@@ -216,13 +221,20 @@ mod x86 {
     }
 }
 
-fn row_extrema(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>) {
+/// Scratch rows of the separable test (per-column maximum and minimum).
+#[derive(Default)]
+struct ColumnExtremes {
+    max: Vec<f32>,
+    min: Vec<f32>,
+}
+
+fn row_extrema(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>, scratch: &mut ColumnExtremes) {
     #[cfg(target_arch = "x86_64")]
     if rows.iter().all(|r| r.len() > cols.end) && cols.start >= 1 {
         // SAFETY (both calls): the CPU supports the features the function was
         // compiled for, and every row has a pixel on each side of `cols`.
         let done = if std::is_x86_feature_detected!("avx512f") {
-            unsafe { x86::row_extrema_avx512(rows, thr, cols.clone(), out) }
+            unsafe { x86::row_extrema_avx512(rows, thr, cols.clone(), out, &mut scratch.max, &mut scratch.min) }
         } else if std::is_x86_feature_detected!("avx2") {
             unsafe { x86::row_extrema_avx2(rows, thr, cols.clone(), out) }
         } else {
@@ -230,6 +242,7 @@ fn row_extrema(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: 
         };
         return row_extrema_generic(rows, thr, done..cols.end, out);
     }
+    let _ = scratch;
     row_extrema_generic(rows, thr, cols, out)
 }
 
