@@ -222,12 +222,12 @@ fn row_block<const B: usize>(src: &[f32], kx: &[f32], dst: &mut [f32], fma: &imp
 }
 
 #[inline(always)]
-fn accumulate_row_generic(padded: &[f32], kx: &[f32], dst: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
+fn accumulate_row_generic<const B: usize>(padded: &[f32], kx: &[f32], dst: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
     let w = dst.len();
     let mut x = 0;
-    while x + BLOCK <= w {
-        row_block::<BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
-        x += BLOCK;
+    while x + B <= w {
+        row_block::<B>(&padded[x..], kx, &mut dst[x..], &fma);
+        x += B;
     }
     while x + SMALL_BLOCK <= w {
         row_block::<SMALL_BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
@@ -295,12 +295,14 @@ fn accumulate_column_generic(
 mod x86 {
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn row_avx2(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
-        super::accumulate_row_generic(padded, kx, dst, f32::mul_add)
+        super::accumulate_row_generic::<{ super::BLOCK }>(padded, kx, dst, f32::mul_add)
     }
 
+    /// Eight independent accumulators: each tap is one load and one FMA per
+    /// vector, so with four the FMA latency (4 cycles) would be the limit.
     #[target_feature(enable = "avx512f,avx2,fma")]
     pub unsafe fn row_avx512(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
-        super::accumulate_row_generic(padded, kx, dst, f32::mul_add)
+        super::accumulate_row_generic::<{ 2 * super::BLOCK }>(padded, kx, dst, f32::mul_add)
     }
 
     #[target_feature(enable = "avx2,fma")]
@@ -401,7 +403,7 @@ fn accumulate_row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     #[cfg(target_arch = "wasm32")]
     return wasm::row(padded, kx, dst);
     #[allow(unreachable_code)]
-    accumulate_row_generic(padded, kx, dst, super::num::fma)
+    accumulate_row_generic::<BLOCK>(padded, kx, dst, super::num::fma)
 }
 
 fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
