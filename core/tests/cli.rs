@@ -232,6 +232,26 @@ fn sift_plain_prints_count_and_time() {
     assert!(t.parse::<f64>().map(|v| v >= 0.0).unwrap_or(false), "bad time {t:?}");
 }
 
+#[test]
+fn sift_repeat_reports_best_and_mean() {
+    let id = first_golden_frame();
+    let frame = dataset().join(format!("gray/00/image_0/{id}.png"));
+    let o = siftlab(&["sift", frame.to_str().unwrap(), "--repeat", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let golden = fs::read(fixtures().join(format!("golden/noipp/{id}.sift"))).unwrap();
+    let n = u32::from_le_bytes(golden[16..20].try_into().unwrap());
+    let line = stdout(&o).trim_end().to_owned();
+    let rest = line.strip_prefix(&format!("{n} keypoints in ")).unwrap_or_else(|| panic!("unexpected {line:?}"));
+    let (best, rest) = rest.split_once(" ms (best of 3; mean ").unwrap_or_else(|| panic!("unexpected {line:?}"));
+    let mean = rest.strip_suffix(" ms)").unwrap_or_else(|| panic!("unexpected {line:?}"));
+    let (best, mean): (f64, f64) = (best.parse().unwrap(), mean.parse().unwrap());
+    assert!(best > 0.0 && best <= mean, "best {best} mean {mean}");
+
+    let o = siftlab(&["sift", frame.to_str().unwrap(), "--repeat", "0"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("0 is not in 1..=1000"), "{}", stderr(&o));
+}
+
 // ---------------------------------------------------------------------------
 // bad input: one clear message, non-zero exit, no panic
 

@@ -182,3 +182,46 @@ fn matching_in_the_browser_equals_the_lab() {
     assert!(checked > 0, "no get_info goldens for FRAME_ID 1");
     assert!(failures.is_empty(), "{} of {checked} differ:\n{}", failures.len(), failures.join("\n"));
 }
+
+/// The lane-wise FMA emulation the wasm blur uses equals the scalar one (itself tested
+/// against hardware FMA natively) on random triples and on sums that land exactly on an
+/// f32 halfway point, zero or an f32-subnormal magnitude (the lanes that take the fallback).
+#[wasm_bindgen_test]
+fn simd_fma_emulation_equals_the_scalar_one() {
+    use core::arch::wasm32::*;
+    use siftlab_core::sift::num::{fma_emulated, fma_emulated_x4};
+    let mut state = 0x9E37_79B9_7F4A_7C15u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut random = |lo: u32| f32::from_bits((next() as u32 & 0x807F_FFFF) | lo);
+    let one_plus = 1.0f32 + f32::EPSILON;
+    let special = [
+        (one_plus, one_plus, -1.0),                     // exact result 2^-22 + 2^-46: halfway in f64
+        (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, 0.0), // 1 + 2^-11 + 2^-24: an f32 halfway point
+        (3.0, 5.0, -15.0),                              // exact zero
+        (1e-20, 1e-20, 0.0),                            // f32-subnormal product
+    ];
+    let mut checked = 0;
+    for round in 0..250_000 {
+        let (a, b, c) = match special.get(round) {
+            // The special case in lane 2, random values around it.
+            Some(&(x, y, z)) => ([random(0x3F00_0000), random(0x4000_0000), x, random(0x3E00_0000)], y, [random(0x3300_0000), random(0x4300_0000), z, random(0x3F00_0000)]),
+            None => (
+                [random(0x3F00_0000), random(0x4000_0000), random(0x3E00_0000), random(0x4300_0000)],
+                random(0x3F00_0000),
+                [random(0x3300_0000), random(0x4300_0000), random(0x3F00_0000), -random(0x4000_0000)],
+            ),
+        };
+        let got = fma_emulated_x4(f32x4(a[0], a[1], a[2], a[3]), b, f32x4(c[0], c[1], c[2], c[3]));
+        let got = [f32x4_extract_lane::<0>(got), f32x4_extract_lane::<1>(got), f32x4_extract_lane::<2>(got), f32x4_extract_lane::<3>(got)];
+        for l in 0..4 {
+            assert_eq!(got[l].to_bits(), fma_emulated(a[l], b, c[l]).to_bits(), "lane {l}: {} * {b} + {}", a[l], c[l]);
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 1_000_000);
+}

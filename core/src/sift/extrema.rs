@@ -223,6 +223,7 @@ mod x86 {
 
 /// Scratch rows of the separable test (per-column maximum and minimum).
 #[derive(Default)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
 struct ColumnExtremes {
     max: Vec<f32>,
     min: Vec<f32>,
