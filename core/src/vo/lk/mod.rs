@@ -344,193 +344,67 @@ fn out_of_bounds(ix: i32, iy: i32, w: usize, h: usize) -> bool {
 /// One level for one point (LKTrackerInvoker::operator()). `next` holds the
 /// stored estimate, updated in place; `status`/`err` are only touched at
 /// level 0.
-/// The four window kernels; [`Scalar`] is the reference, `avx2::Avx2` the
-/// same arithmetic in 8-lane integer / 4-lane f32 vectors (identical bits:
-/// integer sums are exact and every f32 lane adds in the scalar order).
+/// The window kernels of one point and level. [`Scalar`] is the reference
+/// (and what wasm runs); `avx2::Avx2` keeps 16-bit windows in its own column
+/// layout and gets the same bits (see that module).
 trait Kernels {
-    fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win);
-    fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut Win);
-    fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32);
-    fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32);
+    /// The template and gradient windows of one point at one level.
+    type Patch;
+    fn new_patch() -> Box<Self::Patch>;
+    /// Interpolates T, X, Y at `(ix, iy)` of the previous level and returns
+    /// the structure-tensor sums (ΣX², ΣXY, ΣY²) in OpenCV's order.
+    fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], patch: &mut Self::Patch)
+        -> (f32, f32, f32);
+    /// The mismatch vector (b1, b2) of the next-level window at `(jx, jy)`.
+    fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], patch: &mut Self::Patch) -> (f32, f32);
+    /// Σ|J − T| over the window (exact: it stays below 2^24).
+    fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], patch: &mut Self::Patch) -> f32;
 }
 
 struct Scalar;
 
 impl Kernels for Scalar {
-    #[inline(always)]
-    fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win) {
-        warp_window(level, ix, iy, w, out)
+    type Patch = Scratch;
+
+    fn new_patch() -> Box<Scratch> {
+        Box::new(Scratch { tmpl: [[0; WS]; WIN], gx: [[0; WS]; WIN], gy: [[0; WS]; WIN], warped: [[0; WS]; WIN] })
     }
+
     #[inline(always)]
-    fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut Win) {
-        warp_deriv(plane, stride, base, w, out)
+    fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], s: &mut Scratch) -> (f32, f32, f32) {
+        warp_window(prev, ix, iy, w, &mut s.tmpl);
+        let dbase = deriv.offset(ix, iy);
+        warp_deriv(&deriv.ix, deriv.stride, dbase, w, &mut s.gx);
+        warp_deriv(&deriv.iy, deriv.stride, dbase, w, &mut s.gy);
+        tensor_sums(&s.gx, &s.gy)
     }
+
     #[inline(always)]
-    fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
-        tensor_sums(gx, gy)
+    fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], s: &mut Scratch) -> (f32, f32) {
+        warp_window(next, jx, jy, w, &mut s.warped);
+        for (wr, tr) in s.warped.iter_mut().zip(s.tmpl.iter()) {
+            for (v, t) in wr.iter_mut().zip(tr) {
+                *v -= t;
+            }
+        }
+        mismatch(&s.warped, &s.gx, &s.gy)
     }
+
     #[inline(always)]
-    fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
-        mismatch(d, gx, gy)
+    fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], s: &mut Scratch) -> f32 {
+        warp_window(next, jx, jy, w, &mut s.warped);
+        let mut errval = 0f32;
+        for (wr, tr) in s.warped.iter().zip(s.tmpl.iter()) {
+            for (v, t) in wr[..WIN].iter().zip(&tr[..WIN]) {
+                errval += (v - t).abs() as f32;
+            }
+        }
+        errval
     }
 }
 
 #[cfg(target_arch = "x86_64")]
-mod avx2 {
-    use super::{Kernels, Level, Win, FLT_SCALE, WIN};
-    use std::arch::x86_64::*;
-
-    pub struct Avx2;
-
-    /// 4-tap fixed-point interpolation of 24 columns (21 used) per row;
-    /// `$load(ptr)` widens 8 source elements to i32 lanes.
-    macro_rules! warp_fn {
-        ($name:ident, $t:ty, $shift:expr, $load:expr) => {
-            #[target_feature(enable = "avx2")]
-            #[inline]
-            unsafe fn $name(p: *const $t, stride: usize, w: &[i32; 4], out: &mut Win) {
-                let (w0, w1, w2, w3) = (
-                    _mm256_set1_epi32(w[0]),
-                    _mm256_set1_epi32(w[1]),
-                    _mm256_set1_epi32(w[2]),
-                    _mm256_set1_epi32(w[3]),
-                );
-                let round = _mm256_set1_epi32(1 << ($shift - 1));
-                for (y, row) in out.iter_mut().enumerate() {
-                    for blk in 0..3 {
-                        let x = y * stride + blk * 8;
-                        let a = _mm256_mullo_epi32($load(p.add(x)), w0);
-                        let b = _mm256_mullo_epi32($load(p.add(x + 1)), w1);
-                        let c = _mm256_mullo_epi32($load(p.add(x + stride)), w2);
-                        let d = _mm256_mullo_epi32($load(p.add(x + stride + 1)), w3);
-                        let v = _mm256_add_epi32(_mm256_add_epi32(a, b), _mm256_add_epi32(c, d));
-                        let v = _mm256_srai_epi32::<{ $shift }>(_mm256_add_epi32(v, round));
-                        _mm256_storeu_si256(row.as_mut_ptr().add(blk * 8) as *mut __m256i, v);
-                    }
-                }
-            }
-        };
-    }
-
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn load_u8(p: *const u8) -> __m256i {
-        _mm256_cvtepu8_epi32(_mm_loadl_epi64(p as *const __m128i))
-    }
-
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn load_i16(p: *const i16) -> __m256i {
-        _mm256_cvtepi16_epi32(_mm_loadu_si128(p as *const __m128i))
-    }
-
-    warp_fn!(warp_u8, u8, 9, load_u8);
-    warp_fn!(warp_i16, i16, 14, load_i16);
-
-    impl Kernels for Avx2 {
-        #[inline(always)]
-        fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win) {
-            let base = level.offset(ix, iy);
-            let src = &level.padded;
-            assert!(base + WIN * level.stride + 25 <= src.len());
-            let p = src[base..].as_ptr();
-            // SAFETY: only reached on AVX2 CPUs (run_job checks); every load
-            // reads 8 bytes inside `src` (asserted above).
-            unsafe { warp_u8(p, level.stride, w, out) }
-        }
-
-        #[inline(always)]
-        fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut Win) {
-            assert!(base + WIN * stride + 25 <= plane.len());
-            let p = plane[base..].as_ptr();
-            // SAFETY: as above; each load reads 8 i16 inside `plane`.
-            unsafe { warp_i16(p, stride, w, out) }
-        }
-
-        #[inline(always)]
-        fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
-            // SAFETY: AVX2 checked by run_job; loads stay inside the rows.
-            unsafe { tensor_sums(gx, gy) }
-        }
-
-        #[inline(always)]
-        fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
-            // SAFETY: as above.
-            unsafe { mismatch(d, gx, gy) }
-        }
-    }
-
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn ld(row: &[i32; super::WS], x: usize) -> __m256i {
-        _mm256_loadu_si256(row.as_ptr().add(x) as *const __m256i)
-    }
-
-    /// Adds 8 products as f32: lanes 0..3 then lanes 4..7 (columns c, c+4).
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn acc8(acc: __m128, prod: __m256i) -> __m128 {
-        let f = _mm256_cvtepi32_ps(prod);
-        _mm_add_ps(_mm_add_ps(acc, _mm256_castps256_ps128(f)), _mm256_extractf128_ps::<1>(f))
-    }
-
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn total(s: f32, l: __m128) -> f32 {
-        let mut v = [0f32; 4];
-        _mm_storeu_ps(v.as_mut_ptr(), l);
-        s + ((v[0] + v[2]) + (v[1] + v[3]))
-    }
-
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
-        let (mut l11, mut l12, mut l22) = (_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps());
-        let (mut s11, mut s12, mut s22) = (0f32, 0f32, 0f32);
-        for (rx, ry) in gx.iter().zip(gy) {
-            for x in [0usize, 8] {
-                let (vx, vy) = (ld(rx, x), ld(ry, x));
-                l11 = acc8(l11, _mm256_mullo_epi32(vx, vx));
-                l12 = acc8(l12, _mm256_mullo_epi32(vx, vy));
-                l22 = acc8(l22, _mm256_mullo_epi32(vy, vy));
-            }
-            for c in 16..WIN {
-                s11 += (rx[c] * rx[c]) as f32;
-                s12 += (rx[c] * ry[c]) as f32;
-                s22 += (ry[c] * ry[c]) as f32;
-            }
-        }
-        (total(s11, l11), total(s12, l12), total(s22, l22))
-    }
-
-    #[target_feature(enable = "avx2")]
-    #[inline]
-    unsafe fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
-        let (mut p, mut q) = (_mm_setzero_ps(), _mm_setzero_ps());
-        let (mut s1, mut s2) = (0f32, 0f32);
-        for y in 0..WIN {
-            let (dr, xr, yr) = (&d[y], &gx[y], &gy[y]);
-            for x in [0usize, 8] {
-                let dv = ld(dr, x);
-                let px = _mm256_mullo_epi32(dv, ld(xr, x));
-                let py = _mm256_mullo_epi32(dv, ld(yr, x));
-                // Columns c and c+4 summed as exact integers, then rounded.
-                let ux = _mm_cvtepi32_ps(_mm_add_epi32(_mm256_castsi256_si128(px), _mm256_extracti128_si256::<1>(px)));
-                let uy = _mm_cvtepi32_ps(_mm_add_epi32(_mm256_castsi256_si128(py), _mm256_extracti128_si256::<1>(py)));
-                p = _mm_add_ps(p, _mm_unpacklo_ps(ux, uy));
-                q = _mm_add_ps(q, _mm_unpackhi_ps(ux, uy));
-            }
-            for c in 16..WIN {
-                s1 += (dr[c] * xr[c]) as f32;
-                s2 += (dr[c] * yr[c]) as f32;
-            }
-        }
-        let t = _mm_add_ps(p, q);
-        let mut v = [0f32; 4];
-        _mm_storeu_ps(v.as_mut_ptr(), t);
-        ((s1 + (v[0] + v[2])) * FLT_SCALE, (s2 + (v[1] + v[3])) * FLT_SCALE)
-    }
-}
+mod avx2;
 
 /// Window buffers reused across points (every element is written before
 /// it is read).
@@ -555,7 +429,7 @@ fn track_point<K: Kernels>(
     max_level: usize,
     crit: (usize, f64),
     min_eig_threshold: f32,
-    scratch: &mut Scratch,
+    patch: &mut K::Patch,
 ) {
     let scale = 1.0 / (1u32 << level) as f32;
     let p = [prev_pt[0] * scale, prev_pt[1] * scale];
@@ -572,13 +446,7 @@ fn track_point<K: Kernels>(
         return;
     }
     let wts = weights(q[0] - ix as f32, q[1] - iy as f32);
-    let Scratch { tmpl, gx, gy, warped } = scratch;
-    K::warp_window(prev, ix, iy, &wts, tmpl);
-    let dbase = deriv.offset(ix, iy);
-    K::warp_deriv(&deriv.ix, deriv.stride, dbase, &wts, gx);
-    K::warp_deriv(&deriv.iy, deriv.stride, dbase, &wts, gy);
-
-    let (s11, s12, s22) = K::tensor_sums(gx, gy);
+    let (s11, s12, s22) = K::load_patch(prev, deriv, ix, iy, &wts, patch);
     let (a11, a12, a22) = (s11 * FLT_SCALE, s12 * FLT_SCALE, s22 * FLT_SCALE);
     let det = a11 * a22 - a12 * a12;
     let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt())
@@ -603,13 +471,7 @@ fn track_point<K: Kernels>(
             break;
         }
         let w = weights(n[0] - jx as f32, n[1] - jy as f32);
-        K::warp_window(next_lvl, jx, jy, &w, warped);
-        for (wr, tr) in warped.iter_mut().zip(tmpl.iter()) {
-            for (v, t) in wr.iter_mut().zip(tr) {
-                *v -= t;
-            }
-        }
-        let (b1, b2) = K::mismatch(warped, gx, gy);
+        let (b1, b2) = K::mismatch(next_lvl, jx, jy, &w, patch);
         let delta = [(a12 * b2 - a22 * b1) * dinv, (a12 * b1 - a11 * b2) * dinv];
         n = [n[0] + delta[0], n[1] + delta[1]];
         *next = [n[0] + HALF_WIN, n[1] + HALF_WIN];
@@ -635,13 +497,7 @@ fn track_point<K: Kernels>(
             return;
         }
         let w = weights(m[0] - jx as f32, m[1] - jy as f32);
-        K::warp_window(next_lvl, jx, jy, &w, warped);
-        let mut errval = 0f32;
-        for (wr, tr) in warped.iter().zip(tmpl.iter()) {
-            for (v, t) in wr[..WIN].iter().zip(&tr[..WIN]) {
-                errval += (v - t).abs() as f32;
-            }
-        }
+        let errval = K::abs_diff_sum(next_lvl, jx, jy, &w, patch);
         *err = errval / (32 * WIN * WIN) as f32;
     }
 }
@@ -661,26 +517,21 @@ struct Job<'a> {
 #[inline(always)]
 fn run_job_body<K: Kernels>(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
     let prep = job.prep;
-    let mut scratch = Box::new(Scratch {
-        tmpl: [[0; WS]; WIN],
-        gx: [[0; WS]; WIN],
-        gy: [[0; WS]; WIN],
-        warped: [[0; WS]; WIN],
-    });
+    let mut patch = K::new_patch();
     for level in (0..=job.max_level).rev() {
         let (pl, dl, nl) = (&prep.prev[level], &prep.derivs[level], &prep.next[level]);
         for (k, i) in job.range.clone().enumerate() {
             track_point::<K>(
                 pl, dl, nl, job.pts[i], &mut np[k], &mut st[k], &mut er[k], level, job.max_level,
-                job.crit, job.min_eig, &mut scratch,
+                job.crit, job.min_eig, &mut patch,
             );
         }
     }
 }
 
-/// The same code compiled for AVX2: only integer ops and separately rounded
-/// f32 adds/multiplies are involved (Rust never contracts to FMA), so the
-/// wider vectors change the speed, not a bit of the result.
+/// The loop compiled for AVX2 around the AVX2 window kernels: only integer
+/// ops and separately rounded f32 adds/multiplies are involved (Rust never
+/// contracts to FMA), so this changes the speed, not a bit of the result.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn run_job_avx2(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
@@ -988,10 +839,51 @@ mod tests {
         ([318.0, 2.0], [0x439dcd05, 0x40660546], 1, 0x411f6b64),
     ];
 
+    /// The AVX2 tracker against the portable one on a KITTI-sized pair (the
+    /// committed synthetic frames 0 → 1), on a grid of 640 points covering
+    /// borders, flat sky and texture: same positions, status and err, bit for
+    /// bit (the kernel-level test covers the replay path on purpose).
+    #[test]
+    fn avx2_equals_portable_on_a_kitti_sized_pair() {
+        let prev = GrayImage::decode(include_bytes!(
+            "../../../../tests/fixtures/mykitti/gray/00/image_0/000000.png"
+        ))
+        .unwrap();
+        let next = GrayImage::decode(include_bytes!(
+            "../../../../tests/fixtures/mykitti/gray/00/image_0/000001.png"
+        ))
+        .unwrap();
+        let mut pts = Vec::new();
+        for gy in 0..16 {
+            for gx in 0..40 {
+                pts.push([
+                    -8.0 + 32.0 * gx as f32 + 0.37 * gy as f32,
+                    -6.0 + 24.5 * gy as f32 + 0.11 * gx as f32,
+                ]);
+            }
+        }
+        let fast = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
+        let portable = calc_optical_flow_pyr_lk_portable(&prev, &next, &pts, &LkParams::default());
+        let tracked = fast.status.iter().filter(|&&s| s).count();
+        assert!(tracked > 400, "only {tracked} of {} tracked", pts.len());
+        assert_eq!(fast.status, portable.status);
+        for i in 0..pts.len() {
+            let bits = |r: &LkResult| [r.next_pts[i][0].to_bits(), r.next_pts[i][1].to_bits()];
+            assert_eq!(bits(&fast), bits(&portable), "point {i} {:?}", pts[i]);
+            if fast.status[i] {
+                assert_eq!(
+                    fast.err[i].to_bits(),
+                    portable.err[i].to_bits(),
+                    "err of point {i}"
+                );
+            }
+        }
+    }
+
     #[test]
     fn bit_exact_against_opencv_on_a_synthetic_pair() {
-        let prev = GrayImage::decode(include_bytes!("testdata/lk_prev.png")).unwrap();
-        let next = GrayImage::decode(include_bytes!("testdata/lk_next.png")).unwrap();
+        let prev = GrayImage::decode(include_bytes!("../testdata/lk_prev.png")).unwrap();
+        let next = GrayImage::decode(include_bytes!("../testdata/lk_next.png")).unwrap();
         let pts: Vec<[f32; 2]> = LK_GOLDEN.iter().map(|g| g.0).collect();
         let out = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
         // The portable kernels (wasm, CPUs without AVX2) give the same bits.

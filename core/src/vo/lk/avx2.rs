@@ -1,0 +1,635 @@
+//! The tracker's window kernels in AVX2, bit-identical to the scalar ones.
+//!
+//! Windows are kept as 16-bit rows (every value fits: T, J ≤ 8160, |X|, |Y| ≤
+//! 4080, |J − T| ≤ 8160) in a column order chosen for `vpmaddwd`:
+//!
+//! ```text
+//! positions  0..8    columns 0 4 1 5 2 6 3 7      (block 0)
+//! positions  8..16   columns 8 12 9 13 10 14 11 15 (block 8)
+//! positions 16..24   columns 16 .. 23              (tail; 21..23 are scratch)
+//! ```
+//!
+//! so one multiply-add of a pair of positions gives `d(c)·Z(c) + d(c+4)·Z(c+4)`,
+//! the exact integer pair sum OpenCV's SSE loop rounds to f32 (§2.4 step 3).
+//! Bilinear interpolation is a `vpmaddwd` of (I(c), I(c+1)) pairs, shuffled
+//! straight into that order, with (w00, w01) and (w10, w11).
+//!
+//! OpenCV accumulates the sums in f32 in a fixed order, and a chain of 42 (or,
+//! in the scalar tail, 105) dependent f32 adds per iteration is what made the
+//! tracker slow. Here the sums are first taken as exact integers, together
+//! with a bound Σ|terms| per f32 accumulator. When the bound is ≤ 2^24, every
+//! term and every partial sum of OpenCV's running sum is an integer f32
+//! represents exactly, so each of its adds was exact and its result *is* the
+//! integer sum. Only when a bound exceeds 2^24 is the running sum replayed in
+//! OpenCV's order. Either way the bits are OpenCV's.
+
+use super::{Deriv, Kernels, Level, FLT_SCALE, WIN};
+use std::arch::x86_64::*;
+
+pub struct Avx2;
+
+/// One window row in the layout above (positions 24..32 unused).
+#[repr(C, align(32))]
+#[derive(Clone, Copy)]
+pub struct Row([i16; 32]);
+
+type Win16 = [Row; WIN];
+
+/// Template T, gradients X, Y and their magnitudes, plus the last J − T.
+pub struct Patch {
+    t: Win16,
+    x: Win16,
+    y: Win16,
+    ax: Win16,
+    ay: Win16,
+    d: Win16,
+}
+
+/// Position of window column `c` in a [`Row`].
+#[inline(always)]
+fn pos(c: usize) -> usize {
+    if c < 16 {
+        let r = c % 8;
+        8 * (c / 8) + if r < 4 { 2 * r } else { 2 * (r - 4) + 1 }
+    } else {
+        c
+    }
+}
+
+/// Largest accumulator bound for which every partial sum is exact in f32.
+const EXACT: u64 = 1 << 24;
+
+/// (I(c), I(c+1)) pairs of one source row, as 32-bit lanes of two i16, in
+/// the order that packs to the row layout: `a` = columns 0 4 1 5 | 8 12 9 13,
+/// `b` = 2 6 3 7 | 10 14 11 15, `ta` = 16..19, `tb` = 20..23.
+#[derive(Clone, Copy)]
+struct Pairs {
+    a: __m256i,
+    b: __m256i,
+    ta: __m128i,
+    tb: __m128i,
+}
+
+/// Byte pairs of an 8-bit row at `p` (reads `p[0..32]`), zero-extended.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn pairs_u8(p: *const u8) -> Pairs {
+    const Z: i8 = -128;
+    let src = _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i);
+    let tail = _mm_loadu_si128(p.add(16) as *const __m128i);
+    #[rustfmt::skip]
+    let ma = _mm256_setr_epi8(
+        0, Z, 1, Z, 4, Z, 5, Z, 1, Z, 2, Z, 5, Z, 6, Z,
+        0, Z, 1, Z, 4, Z, 5, Z, 1, Z, 2, Z, 5, Z, 6, Z);
+    #[rustfmt::skip]
+    let mb = _mm256_setr_epi8(
+        2, Z, 3, Z, 6, Z, 7, Z, 3, Z, 4, Z, 7, Z, 8, Z,
+        2, Z, 3, Z, 6, Z, 7, Z, 3, Z, 4, Z, 7, Z, 8, Z);
+    let mta = _mm_setr_epi8(0, Z, 1, Z, 1, Z, 2, Z, 2, Z, 3, Z, 3, Z, 4, Z);
+    let mtb = _mm_setr_epi8(4, Z, 5, Z, 5, Z, 6, Z, 6, Z, 7, Z, 7, Z, 8, Z);
+    Pairs {
+        a: _mm256_shuffle_epi8(src, ma),
+        b: _mm256_shuffle_epi8(src, mb),
+        ta: _mm_shuffle_epi8(tail, mta),
+        tb: _mm_shuffle_epi8(tail, mtb),
+    }
+}
+
+/// Element pairs of a 16-bit row at `p` (reads `p[0..28]`).
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn pairs_i16(p: *const i16) -> Pairs {
+    // (e, e+1), (e+4, e+5), (e+1, e+2), (e+5, e+6) of 8 loaded elements; the
+    // second half of each block is the same pattern loaded 2 further on.
+    #[rustfmt::skip]
+    let m = _mm256_setr_epi8(
+        0, 1, 2, 3, 8, 9, 10, 11, 2, 3, 4, 5, 10, 11, 12, 13,
+        0, 1, 2, 3, 8, 9, 10, 11, 2, 3, 4, 5, 10, 11, 12, 13);
+    let mt = _mm_setr_epi8(0, 1, 2, 3, 2, 3, 4, 5, 4, 5, 6, 7, 6, 7, 8, 9);
+    let a = _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i);
+    let b = _mm256_loadu2_m128i(p.add(10) as *const __m128i, p.add(2) as *const __m128i);
+    Pairs {
+        a: _mm256_shuffle_epi8(a, m),
+        b: _mm256_shuffle_epi8(b, m),
+        ta: _mm_shuffle_epi8(_mm_loadu_si128(p.add(16) as *const __m128i), mt),
+        tb: _mm_shuffle_epi8(_mm_loadu_si128(p.add(20) as *const __m128i), mt),
+    }
+}
+
+/// One interpolated output row: `(top·(w00, w01) + bottom·(w10, w11) +
+/// 2^(S−1)) >> S`, packed to i16 in the row layout (block part, tail part).
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn blend<const S: i32>(
+    top: &Pairs,
+    bot: &Pairs,
+    wt: __m256i,
+    wb: __m256i,
+) -> (__m256i, __m128i) {
+    (
+        _mm256_packs_epi32(
+            mix::<S>(top.a, bot.a, wt, wb),
+            mix::<S>(top.b, bot.b, wt, wb),
+        ),
+        _mm_packs_epi32(
+            mix4::<S>(
+                top.ta,
+                bot.ta,
+                _mm256_castsi256_si128(wt),
+                _mm256_castsi256_si128(wb),
+            ),
+            mix4::<S>(
+                top.tb,
+                bot.tb,
+                _mm256_castsi256_si128(wt),
+                _mm256_castsi256_si128(wb),
+            ),
+        ),
+    )
+}
+
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn mix<const S: i32>(t: __m256i, b: __m256i, wt: __m256i, wb: __m256i) -> __m256i {
+    let v = _mm256_add_epi32(_mm256_madd_epi16(t, wt), _mm256_madd_epi16(b, wb));
+    _mm256_srai_epi32::<S>(_mm256_add_epi32(v, _mm256_set1_epi32(1 << (S - 1))))
+}
+
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn mix4<const S: i32>(t: __m128i, b: __m128i, wt: __m128i, wb: __m128i) -> __m128i {
+    let v = _mm_add_epi32(_mm_madd_epi16(t, wt), _mm_madd_epi16(b, wb));
+    _mm_srai_epi32::<S>(_mm_add_epi32(v, _mm_set1_epi32(1 << (S - 1))))
+}
+
+/// The two weight pairs as i16 lanes: (w00, w01) for the top row, (w10, w11)
+/// for the bottom one (all ≤ 16384).
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn weight_pairs(w: &[i32; 4]) -> (__m256i, __m256i) {
+    (
+        _mm256_set1_epi32((w[1] << 16) | (w[0] & 0xffff)),
+        _mm256_set1_epi32((w[3] << 16) | (w[2] & 0xffff)),
+    )
+}
+
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn store(row: &mut Row, lo: __m256i, tail: __m128i) {
+    _mm256_store_si256(row.0.as_mut_ptr() as *mut __m256i, lo);
+    _mm_store_si128(row.0.as_mut_ptr().add(16) as *mut __m128i, tail);
+}
+
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn load(row: &Row) -> (__m256i, __m128i) {
+    (
+        _mm256_load_si256(row.0.as_ptr() as *const __m256i),
+        _mm_load_si128(row.0.as_ptr().add(16) as *const __m128i),
+    )
+}
+
+/// Interpolates the 21 rows of an 8-bit level window at `p` into `out`.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn warp_u8(p: *const u8, stride: usize, w: &[i32; 4], out: &mut Win16) {
+    let (wt, wb) = weight_pairs(w);
+    let mut top = pairs_u8(p);
+    for (y, row) in out.iter_mut().enumerate() {
+        let bot = pairs_u8(p.add((y + 1) * stride));
+        let (lo, tail) = blend::<9>(&top, &bot, wt, wb);
+        store(row, lo, tail);
+        top = bot;
+    }
+}
+
+/// The same for a 16-bit derivative plane; columns 21..23 are zeroed so that
+/// every product with them vanishes.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn warp_i16(p: *const i16, stride: usize, w: &[i32; 4], out: &mut Win16, abs: &mut Win16) {
+    let (wt, wb) = weight_pairs(w);
+    let keep = _mm_setr_epi16(-1, -1, -1, -1, -1, 0, 0, 0);
+    let mut top = pairs_i16(p);
+    for (y, (row, arow)) in out.iter_mut().zip(abs.iter_mut()).enumerate() {
+        let bot = pairs_i16(p.add((y + 1) * stride));
+        let (lo, tail) = blend::<14>(&top, &bot, wt, wb);
+        let tail = _mm_and_si128(tail, keep);
+        store(row, lo, tail);
+        store(arow, _mm256_abs_epi16(lo), _mm_abs_epi16(tail));
+        top = bot;
+    }
+}
+
+/// Horizontal sums of a block-part and a tail-part accumulator: the four
+/// column groups k (columns k, k+4, k+8, k+12: lanes k and 4+k) and the tail.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn groups(lo: __m256i, tail: __m128i) -> ([i64; 4], i64) {
+    let (mut l, mut t) = ([0i32; 8], [0i32; 4]);
+    _mm256_storeu_si256(l.as_mut_ptr() as *mut __m256i, lo);
+    _mm_storeu_si128(t.as_mut_ptr() as *mut __m128i, tail);
+    let g = |k: usize| l[k] as i64 + l[4 + k] as i64;
+    ([g(0), g(1), g(2), g(3)], t.iter().map(|&v| v as i64).sum())
+}
+
+/// Whether each column group's bound (lanes k and 4+k; non-negative, may
+/// exceed i32 once combined) allows exact integer sums.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn lanes_exact(bound: __m256i) -> bool {
+    let mut l = [0u32; 8];
+    _mm256_storeu_si256(l.as_mut_ptr() as *mut __m256i, bound);
+    (0..4).all(|k| l[k] as u64 + l[4 + k] as u64 <= EXACT)
+}
+
+/// The same for the tail (one running sum over columns 16..20).
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn tail_exact(bound: __m128i) -> bool {
+    let mut t = [0u32; 4];
+    _mm_storeu_si128(t.as_mut_ptr() as *mut __m128i, bound);
+    t.iter().map(|&v| v as u64).sum::<u64>() <= EXACT
+}
+
+/// OpenCV's tensor lanes L0..L3 of ΣA·B, replayed term by term: columns
+/// 0..15 in column order, column c into lane c mod 4 (§2.4 "Structure tensor").
+fn tensor_lanes_replay(a: &Win16, b: &Win16) -> [f32; 4] {
+    let mut l = [0f32; 4];
+    for (ra, rb) in a.iter().zip(b) {
+        for c in 0..16 {
+            l[c % 4] += (ra.0[pos(c)] as i32 * rb.0[pos(c)] as i32) as f32;
+        }
+    }
+    l
+}
+
+/// The scalar running sum over columns 16..20, row by row (tensor S, and
+/// s1/s2 of the mismatch with `a` = J − T).
+fn tail_replay(a: &Win16, b: &Win16) -> f32 {
+    let mut s = 0f32;
+    for (ra, rb) in a.iter().zip(b) {
+        for c in 16..WIN {
+            s += (ra.0[c] as i32 * rb.0[c] as i32) as f32;
+        }
+    }
+    s
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn load_patch(
+    prev: &Level,
+    deriv: &Deriv,
+    ix: i32,
+    iy: i32,
+    w: &[i32; 4],
+    p: &mut Patch,
+) -> (f32, f32, f32) {
+    let base = prev.offset(ix, iy);
+    assert!(base + WIN * prev.stride + 32 <= prev.padded.len());
+    warp_u8(prev.padded[base..].as_ptr(), prev.stride, w, &mut p.t);
+    let dbase = deriv.offset(ix, iy);
+    assert!(dbase + WIN * deriv.stride + 28 <= deriv.ix.len() && deriv.ix.len() == deriv.iy.len());
+    warp_i16(
+        deriv.ix[dbase..].as_ptr(),
+        deriv.stride,
+        w,
+        &mut p.x,
+        &mut p.ax,
+    );
+    warp_i16(
+        deriv.iy[dbase..].as_ptr(),
+        deriv.stride,
+        w,
+        &mut p.y,
+        &mut p.ay,
+    );
+
+    // X², Y² are their own bounds; XY is bounded by |X||Y|.
+    let z = _mm256_setzero_si256();
+    let (mut xx, mut yy, mut xy, mut bxy) = (z, z, z, z);
+    let z4 = _mm_setzero_si128();
+    let (mut txx, mut tyy, mut txy, mut tbxy) = (z4, z4, z4, z4);
+    for y in 0..WIN {
+        let (x, tx) = load(&p.x[y]);
+        let (g, tg) = load(&p.y[y]);
+        let (ax, tax) = load(&p.ax[y]);
+        let (ay, tay) = load(&p.ay[y]);
+        xx = _mm256_add_epi32(xx, _mm256_madd_epi16(x, x));
+        yy = _mm256_add_epi32(yy, _mm256_madd_epi16(g, g));
+        xy = _mm256_add_epi32(xy, _mm256_madd_epi16(x, g));
+        bxy = _mm256_add_epi32(bxy, _mm256_madd_epi16(ax, ay));
+        txx = _mm_add_epi32(txx, _mm_madd_epi16(tx, tx));
+        tyy = _mm_add_epi32(tyy, _mm_madd_epi16(tg, tg));
+        txy = _mm_add_epi32(txy, _mm_madd_epi16(tx, tg));
+        tbxy = _mm_add_epi32(tbxy, _mm_madd_epi16(tax, tay));
+    }
+    (
+        tensor_sum(xx, txx, xx, txx, &p.x, &p.x),
+        tensor_sum(xy, txy, bxy, tbxy, &p.x, &p.y),
+        tensor_sum(yy, tyy, yy, tyy, &p.y, &p.y),
+    )
+}
+
+/// One tensor sum: lanes and tail each from exact integers, or replayed in
+/// OpenCV's order when their bound fails.
+#[target_feature(enable = "avx2")]
+#[inline]
+unsafe fn tensor_sum(
+    lo: __m256i,
+    tail: __m128i,
+    bound_lo: __m256i,
+    bound_tail: __m128i,
+    a: &Win16,
+    b: &Win16,
+) -> f32 {
+    let (g, s) = groups(lo, tail);
+    let l = if lanes_exact(bound_lo) {
+        g.map(|v| v as f32)
+    } else {
+        tensor_lanes_replay(a, b)
+    };
+    let s = if tail_exact(bound_tail) {
+        s as f32
+    } else {
+        tail_replay(a, b)
+    };
+    s + ((l[0] + l[2]) + (l[1] + l[3]))
+}
+
+/// OpenCV's T0..T3 (= P + Q: X of groups 0+2, Y of 0+2, X of 1+3, Y of
+/// 1+3) replayed from the stored J − T, for when a lanes bound fails.
+#[target_feature(enable = "avx2")]
+unsafe fn mismatch_lanes_replay(p: &Patch) -> [f32; 4] {
+    let (mut acc_p, mut acc_q) = (_mm_setzero_ps(), _mm_setzero_ps());
+    for y in 0..WIN {
+        let (d, _) = load(&p.d[y]);
+        let (x, _) = load(&p.x[y]);
+        let (g, _) = load(&p.y[y]);
+        let ux = _mm256_madd_epi16(d, x);
+        let uy = _mm256_madd_epi16(d, g);
+        // Per block: P += (uX(B), uY(B), uX(B+1), uY(B+1)), Q += the next two.
+        let pv = _mm256_cvtepi32_ps(_mm256_unpacklo_epi32(ux, uy));
+        let qv = _mm256_cvtepi32_ps(_mm256_unpackhi_epi32(ux, uy));
+        acc_p = _mm_add_ps(acc_p, _mm256_castps256_ps128(pv));
+        acc_q = _mm_add_ps(acc_q, _mm256_castps256_ps128(qv));
+        acc_p = _mm_add_ps(acc_p, _mm256_extractf128_ps::<1>(pv));
+        acc_q = _mm_add_ps(acc_q, _mm256_extractf128_ps::<1>(qv));
+    }
+    let mut t = [0f32; 4];
+    _mm_storeu_ps(t.as_mut_ptr(), _mm_add_ps(acc_p, acc_q));
+    t
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+    let base = next.offset(jx, jy);
+    assert!(base + WIN * next.stride + 32 <= next.padded.len());
+    let src = next.padded[base..].as_ptr();
+    let stride = next.stride;
+    let (wt, wb) = weight_pairs(w);
+    let z = _mm256_setzero_si256();
+    let z4 = _mm_setzero_si128();
+    let (mut sx, mut sy, mut bx, mut by) = (z, z, z, z);
+    let (mut tx, mut ty, mut tbx, mut tby) = (z4, z4, z4, z4);
+    let mut top = pairs_u8(src);
+    for y in 0..WIN {
+        let bot = pairs_u8(src.add((y + 1) * stride));
+        let (j, tj) = blend::<9>(&top, &bot, wt, wb);
+        top = bot;
+        let (t, tt) = load(&p.t[y]);
+        let (d, td) = (_mm256_sub_epi16(j, t), _mm_sub_epi16(tj, tt));
+        store(&mut p.d[y], d, td);
+        let (x, txr) = load(&p.x[y]);
+        let (g, tgr) = load(&p.y[y]);
+        let (ax, taxr) = load(&p.ax[y]);
+        let (ay, tayr) = load(&p.ay[y]);
+        let (ad, tad) = (_mm256_abs_epi16(d), _mm_abs_epi16(td));
+        sx = _mm256_add_epi32(sx, _mm256_madd_epi16(d, x));
+        sy = _mm256_add_epi32(sy, _mm256_madd_epi16(d, g));
+        bx = _mm256_add_epi32(bx, _mm256_madd_epi16(ad, ax));
+        by = _mm256_add_epi32(by, _mm256_madd_epi16(ad, ay));
+        tx = _mm_add_epi32(tx, _mm_madd_epi16(td, txr));
+        ty = _mm_add_epi32(ty, _mm_madd_epi16(td, tgr));
+        tbx = _mm_add_epi32(tbx, _mm_madd_epi16(tad, taxr));
+        tby = _mm_add_epi32(tby, _mm_madd_epi16(tad, tayr));
+    }
+    let (gx, ex) = groups(sx, tx);
+    let (gy, ey) = groups(sy, ty);
+    let mut t = [
+        gx[0] as f32 + gx[2] as f32,
+        gy[0] as f32 + gy[2] as f32,
+        gx[1] as f32 + gx[3] as f32,
+        gy[1] as f32 + gy[3] as f32,
+    ];
+    let (lanes_x, lanes_y) = (lanes_exact(bx), lanes_exact(by));
+    if !(lanes_x && lanes_y) {
+        let r = mismatch_lanes_replay(p);
+        if !lanes_x {
+            (t[0], t[2]) = (r[0], r[2]);
+        }
+        if !lanes_y {
+            (t[1], t[3]) = (r[1], r[3]);
+        }
+    }
+    let s1 = if tail_exact(tbx) {
+        ex as f32
+    } else {
+        tail_replay(&p.d, &p.x)
+    };
+    let s2 = if tail_exact(tby) {
+        ey as f32
+    } else {
+        tail_replay(&p.d, &p.y)
+    };
+    (
+        (s1 + (t[0] + t[2])) * FLT_SCALE,
+        (s2 + (t[1] + t[3])) * FLT_SCALE,
+    )
+}
+
+#[target_feature(enable = "avx2")]
+unsafe fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) -> f32 {
+    let base = next.offset(jx, jy);
+    assert!(base + WIN * next.stride + 32 <= next.padded.len());
+    let src = next.padded[base..].as_ptr();
+    let (wt, wb) = weight_pairs(w);
+    let ones = _mm256_set1_epi16(1);
+    let tail_ones = _mm_setr_epi16(1, 1, 1, 1, 1, 0, 0, 0);
+    let (mut acc, mut tacc) = (_mm256_setzero_si256(), _mm_setzero_si128());
+    let mut top = pairs_u8(src);
+    for y in 0..WIN {
+        let bot = pairs_u8(src.add((y + 1) * next.stride));
+        let (j, tj) = blend::<9>(&top, &bot, wt, wb);
+        top = bot;
+        let (t, tt) = load(&p.t[y]);
+        acc = _mm256_add_epi32(
+            acc,
+            _mm256_madd_epi16(_mm256_abs_epi16(_mm256_sub_epi16(j, t)), ones),
+        );
+        tacc = _mm_add_epi32(
+            tacc,
+            _mm_madd_epi16(_mm_abs_epi16(_mm_sub_epi16(tj, tt)), tail_ones),
+        );
+    }
+    // ≤ 441·8160 < 2^24: OpenCV's row-major f32 running sum is this integer.
+    let (g, s) = groups(acc, tacc);
+    (g.iter().sum::<i64>() + s) as f32
+}
+
+impl Kernels for Avx2 {
+    type Patch = Patch;
+
+    fn new_patch() -> Box<Patch> {
+        let zero = [Row([0; 32]); WIN];
+        Box::new(Patch {
+            t: zero,
+            x: zero,
+            y: zero,
+            ax: zero,
+            ay: zero,
+            d: zero,
+        })
+    }
+
+    #[inline(always)]
+    fn load_patch(
+        prev: &Level,
+        deriv: &Deriv,
+        ix: i32,
+        iy: i32,
+        w: &[i32; 4],
+        p: &mut Patch,
+    ) -> (f32, f32, f32) {
+        // SAFETY: only reached on AVX2 CPUs (run_job checks); every load is
+        // inside the padded planes (asserted in the callee).
+        unsafe { load_patch(prev, deriv, ix, iy, w, p) }
+    }
+
+    #[inline(always)]
+    fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+        // SAFETY: as above.
+        unsafe { mismatch(next, jx, jy, w, p) }
+    }
+
+    #[inline(always)]
+    fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> f32 {
+        // SAFETY: as above.
+        unsafe { abs_diff_sum(next, jx, jy, w, p) }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{weights, Deriv, Kernels, Level, Scalar};
+    use super::*;
+
+    #[test]
+    fn the_row_layout_pairs_each_column_with_the_one_four_further() {
+        let mut seen = [false; 24];
+        for c in 0..24 {
+            assert!(!seen[pos(c)]);
+            seen[pos(c)] = true;
+        }
+        for c in [0, 1, 2, 3, 8, 9, 10, 11] {
+            assert_eq!(pos(c + 4), pos(c) + 1);
+            assert_eq!(pos(c) % 2, 0);
+        }
+    }
+
+    /// A level of smooth texture plus `noise` (0..=255) of xorshift noise:
+    /// noise makes gradients and residuals large enough to overflow the
+    /// exactness bounds, smooth texture keeps them small.
+    fn level(w: usize, h: usize, noise: u32, seed: u64) -> Level {
+        let mut s = seed;
+        let data = (0..w * h)
+            .map(|i| {
+                s ^= s << 13;
+                s ^= s >> 7;
+                s ^= s << 17;
+                let (x, y) = ((i % w) as f64, (i / w) as f64);
+                let smooth =
+                    128.0 + 60.0 * (x * 0.11 + y * 0.07).sin() + 40.0 * (y * 0.13 - x * 0.05).cos();
+                let n = if noise == 0 {
+                    0
+                } else {
+                    (s % (2 * noise as u64 + 1)) as i64 - noise as i64
+                };
+                (smooth as i64 + n).clamp(0, 255) as u8
+            })
+            .collect();
+        Level::new(data, w, h)
+    }
+
+    /// Every kernel against the scalar reference, bit for bit, at random
+    /// window positions (borders included) and sub-pixel weights; both the
+    /// exact-integer path and the replay path must be taken.
+    #[test]
+    fn kernels_equal_the_scalar_ones_on_both_paths() {
+        if !std::is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let (w, h) = (160, 90);
+        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            seed
+        };
+        let (mut exact_seen, mut replay_seen) = (0, 0);
+        for (noise, cases) in [(0u32, 400), (12, 400), (90, 400), (255, 200)] {
+            let prev = level(w, h, noise, 1 + noise as u64);
+            let next = level(w, h, noise, 7 + noise as u64);
+            let deriv = Deriv::new(&prev);
+            let (mut sp, mut vp) = (Scalar::new_patch(), Avx2::new_patch());
+            for _ in 0..cases {
+                let mut coord = |n: usize| (rnd() % (n as u64 + 21)) as i32 - 21;
+                let (ix, iy, jx, jy) = (coord(w), coord(h), coord(w), coord(h));
+                let frac = |r: u64| (r % 4096) as f32 / 4096.0;
+                let w0 = weights(frac(rnd()), frac(rnd()));
+                let w1 = weights(frac(rnd()), frac(rnd()));
+                let a = Scalar::load_patch(&prev, &deriv, ix, iy, &w0, &mut sp);
+                let b = Avx2::load_patch(&prev, &deriv, ix, iy, &w0, &mut vp);
+                assert_eq!(
+                    [a.0.to_bits(), a.1.to_bits(), a.2.to_bits()],
+                    [b.0.to_bits(), b.1.to_bits(), b.2.to_bits()],
+                    "tensor at ({ix}, {iy}), noise {noise}"
+                );
+                let a = Scalar::mismatch(&next, jx, jy, &w1, &mut sp);
+                let b = Avx2::mismatch(&next, jx, jy, &w1, &mut vp);
+                assert_eq!(
+                    [a.0.to_bits(), a.1.to_bits()],
+                    [b.0.to_bits(), b.1.to_bits()],
+                    "mismatch ({ix}, {iy}) → ({jx}, {jy}), noise {noise}"
+                );
+                let a = Scalar::abs_diff_sum(&next, jx, jy, &w1, &mut sp);
+                let b = Avx2::abs_diff_sum(&next, jx, jy, &w1, &mut vp);
+                assert_eq!(a.to_bits(), b.to_bits());
+                // Which path the mismatch's X lanes took (its bound, recomputed).
+                let bound: [u64; 4] = std::array::from_fn(|k| {
+                    (0..WIN)
+                        .map(|y| {
+                            [k, k + 4, k + 8, k + 12]
+                                .iter()
+                                .map(|&c| {
+                                    (vp.d[y].0[pos(c)] as i64 * vp.x[y].0[pos(c)] as i64)
+                                        .unsigned_abs()
+                                })
+                                .sum::<u64>()
+                        })
+                        .sum()
+                });
+                if bound.iter().all(|&v| v <= EXACT) {
+                    exact_seen += 1;
+                } else {
+                    replay_seen += 1;
+                }
+            }
+        }
+        assert!(
+            exact_seen > 100 && replay_seen > 100,
+            "exact {exact_seen}, replayed {replay_seen}"
+        );
+    }
+}
