@@ -47,6 +47,7 @@ pub struct Svd {
 /// `JacobiSVDImpl_<double>` (§3.5). `at` holds `n1` working vectors of length
 /// `m` (only the first `n` are data; the rest are generated when `n1 > n`),
 /// `vt` receives the n×n rotation accumulator. `w` gets the n singular values.
+#[inline(always)]
 fn jacobi_impl(at: &mut [f64], m: usize, n: usize, n1: usize, w: &mut [f64], vt: &mut [f64]) {
     // JacobiSVD(double*) passes minval = DBL_MIN and eps = 10·DBL_EPSILON.
     let minval = f64::MIN_POSITIVE;

@@ -42,10 +42,19 @@ pub fn decompose_essential(e: &Mat3) -> (Mat3, Mat3, Vec3) {
     (r1, r2, [u[0][2], u[1][2], u[2][2]])
 }
 
-/// Whether the point triangulated with `P0 = [I|0]` and `P = [R|t]` lies in
-/// front of both cameras and closer than `dist` (the tests of §4 step 4).
+/// Whether the point triangulated with `P0 = [I|0]` and `P = [R|t]`, and the
+/// one triangulated with `[R|−t]`, lie in front of both cameras and closer
+/// than `dist` (the tests of §4 step 4).
+///
+/// One SVD serves both: the DLT matrix of `[R|−t]` is that of `[R|t]` with
+/// its last column negated, and every step of the Jacobi SVD commutes
+/// exactly with negating a working vector (products, sums, `hypot` and
+/// `sqrt` see the same magnitudes; each rotation only moves the sign between
+/// the two vectors it mixes). So OpenCV's separate SVD gives exactly
+/// `±(X0, X1, X2, −X3)`, and its tests, which do not depend on the sign of X,
+/// come out as the negated quantities below: the same votes, bit for bit.
 #[inline]
-fn votes_for(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> bool {
+fn votes_for(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> (bool, bool) {
     let (x1, y1, x2, y2) = (a[0], a[1], b[0], b[1]);
     let p: [[f64; 4]; 3] = std::array::from_fn(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
     let m = [
@@ -57,17 +66,16 @@ fn votes_for(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> bool {
     let x = null_vector_4x4(&m);
     // OpenCV's `mask = X2·X3 > 0` then `Q /= Q.row(3)`: an X3 of 0 or NaN
     // fails this first test, so afterwards the fourth coordinate is exactly 1.
+    // With −t: X2·(−X3), Q0..2 negated, and Z' = −(R·Q + t)_z exactly.
     let sign = x[2] * x[3];
-    if sign.is_nan() || sign <= 0.0 {
-        return false;
+    if sign.is_nan() || sign == 0.0 {
+        return (false, false);
     }
     let q = [x[0] / x[3], x[1] / x[3], x[2] / x[3], 1.0];
-    // `Z < dist` is false for NaN, as OpenCV's comparison.
-    if q[2] >= dist || q[2].is_nan() {
-        return false;
-    }
     let z2 = p[2][0] * q[0] + p[2][1] * q[1] + p[2][2] * q[2] + p[2][3] * q[3];
-    z2 > 0.0 && z2 < dist
+    // `Z < dist` is false for NaN, as OpenCV's comparisons.
+    let ok = |s: f64, z: f64, z2: f64| s > 0.0 && z < dist && z2 > 0.0 && z2 < dist;
+    (ok(sign, q[2], z2), ok(-sign, -q[2], -z2))
 }
 
 /// recoverPose on normalized coordinates.
@@ -85,10 +93,14 @@ pub fn recover_pose_normalized(e: &Mat3, p1: &[[f64; 2]], p2: &[[f64; 2]], dist:
     let (r1, r2, t) = decompose_essential(e);
     let nt = [-t[0], -t[1], -t[2]];
     let cands: [(&Mat3, &Vec3); 4] = [(&r1, &t), (&r2, &t), (&r1, &nt), (&r2, &nt)];
-    let masks: Vec<Vec<bool>> = cands
-        .iter()
-        .map(|(r, t)| p1.iter().zip(p2).map(|(&a, &b)| votes_for(r, t, a, b, dist)).collect())
-        .collect();
+    let mut masks: [Vec<bool>; 4] = std::array::from_fn(|_| Vec::with_capacity(p1.len()));
+    for (&a, &b) in p1.iter().zip(p2) {
+        for k in 0..2 {
+            let (plus, minus) = votes_for(cands[k].0, &t, a, b, dist);
+            masks[k].push(plus);
+            masks[k + 2].push(minus);
+        }
+    }
     let votes: [usize; 4] = std::array::from_fn(|k| masks[k].iter().filter(|&&m| m).count());
     // The first candidate whose count is ≥ all others.
     let best = (0..4).find(|&k| (0..4).all(|j| votes[k] >= votes[j])).unwrap_or(0);
@@ -133,6 +145,65 @@ mod tests {
             assert_eq!(pose.inliers, 200);
             assert_eq!(pose.votes.iter().filter(|&&v| v == 200).count(), 1);
         }
+    }
+
+    /// The old way, as OpenCV does it: one SVD per candidate.
+    fn votes_separately(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> bool {
+        let p: [[f64; 4]; 3] = std::array::from_fn(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
+        let m = [
+            [-1.0, 0.0, a[0], 0.0],
+            [0.0, -1.0, a[1], 0.0],
+            std::array::from_fn(|k| b[0] * p[2][k] - p[0][k]),
+            std::array::from_fn(|k| b[1] * p[2][k] - p[1][k]),
+        ];
+        let x = null_vector_4x4(&m);
+        if !(x[2] * x[3] > 0.0) {
+            return false;
+        }
+        let q = [x[0] / x[3], x[1] / x[3], x[2] / x[3], 1.0];
+        let z2 = p[2][0] * q[0] + p[2][1] * q[1] + p[2][2] * q[2] + p[2][3] * q[3];
+        q[2] < dist && z2 > 0.0 && z2 < dist
+    }
+
+    #[test]
+    fn one_svd_for_both_signs_of_t_gives_opencvs_votes() {
+        let (p1, p2) = golden_points();
+        let cam = Camera::default();
+        let e = find_essential_mat(&p1, &p2, &cam, &RansacParams::default()).unwrap();
+        let (r1, r2, t) = decompose_essential(e.essential().unwrap());
+        let nt = [-t[0], -t[1], -t[2]];
+        // The golden scene (inliers and outliers) plus points scattered over
+        // the frame and beyond, so every test of §4 passes and fails somewhere,
+        // with short distance thresholds to hit `Z < dist` both ways.
+        let mut a: Vec<[f64; 2]> = p1.iter().map(|&p| cam.normalize(p)).collect();
+        let mut b: Vec<[f64; 2]> = p2.iter().map(|&p| cam.normalize(p)).collect();
+        let mut s = 0x2545_f491_4f6c_dd1du64;
+        let mut rnd = move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        };
+        for _ in 0..2000 {
+            let (x, y) = (rnd(), rnd() * 0.5);
+            a.push([x, y]);
+            b.push([x + 0.05 * rnd(), y + 0.05 * rnd()]);
+        }
+        let mut counts = [[0usize; 2]; 4];
+        for dist in [50.0, 5.0, 1.0] {
+            for (&pa, &pb) in a.iter().zip(&b) {
+                for (k, r) in [&r1, &r2].into_iter().enumerate() {
+                    let (plus, minus) = votes_for(r, &t, pa, pb, dist);
+                    assert_eq!(plus, votes_separately(r, &t, pa, pb, dist), "[R{}|t] at {pa:?} {pb:?}", k + 1);
+                    assert_eq!(minus, votes_separately(r, &nt, pa, pb, dist), "[R{}|-t] at {pa:?} {pb:?}", k + 1);
+                    counts[k][plus as usize] += 1;
+                    counts[k + 2][minus as usize] += 1;
+                }
+            }
+        }
+        // [R2|±t] turns the scene around: it wins almost no points.
+        assert!(counts.iter().all(|c| c[0] > 100), "{counts:?}");
+        assert!(counts[0][1] > 100 && counts[2][1] > 100, "{counts:?}");
     }
 
     #[test]
