@@ -139,6 +139,18 @@ impl Odometry {
     /// 1 on: the scale of frame i is the GT distance between i−1 and i). On
     /// error the state is unchanged, so the caller keeps what it had.
     pub fn step(&mut self, img: &GrayImage, gt: Option<&PoseRow>) -> Result<StepResult> {
+        self.step_detected(img, gt, None)
+    }
+
+    /// [`Odometry::step`] with the detector's points for `img` already
+    /// computed elsewhere (`detected`, used if the loop re-detects; `None`:
+    /// detect here if needed).
+    pub fn step_detected(
+        &mut self,
+        img: &GrayImage,
+        gt: Option<&PoseRow>,
+        mut detected: Option<Vec<[f32; 2]>>,
+    ) -> Result<StepResult> {
         let i = self.frame;
         self.check_frame(img)?;
         let gt_position = gt.map(position);
@@ -158,7 +170,10 @@ impl Odometry {
             points_out: 0,
         };
         let Some(last) = &self.last else {
-            let refs = (self.detector)(img);
+            let refs = match detected {
+                Some(points) => points,
+                None => (self.detector)(img),
+            };
             res.redetected = true;
             res.points_out = refs.len();
             self.refs = refs;
@@ -212,8 +227,11 @@ impl Odometry {
         // From frame 2 on the lab re-detects whenever fewer than 1500 points
         // were tracked, which is nearly always: natively the detector runs on
         // another thread while this one tracks (same results, less waiting).
-        let speculate = scale.is_some();
-        let (tracked, mut detected) = run_beside(speculate, detector, img, track);
+        let speculate = scale.is_some() && detected.is_none();
+        let (tracked, beside) = run_beside(speculate, detector, img, track);
+        if beside.is_some() {
+            detected = beside;
+        }
         let Tracked { pyr, refs, cur, ess, pose } = tracked?;
         res.points_in = self.refs.len();
         res.tracked = cur.len();
@@ -336,26 +354,58 @@ pub fn run(
     let mut out = Vec::with_capacity(n);
     #[cfg(not(target_arch = "wasm32"))]
     {
-        // Frame i+1 is read and decoded on another thread while frame i is
-        // processed (the lab reads each frame inside its loop).
-        std::thread::scope(|s| -> Result<()> {
-            let (tx, rx) = std::sync::mpsc::sync_channel(1);
+        // A three-stage pipeline: frame i+2 is read and decoded, frame i+1's
+        // keypoints are detected, and frame i is tracked, all at once.
+        // Detection needs only the image, so running it ahead changes no
+        // result; it keeps both cores busy through the serial parts of each
+        // stage (RANSAC and recoverPose, SIFT's ordering).
+        let first = odo.frame;
+        let mut detector: Detector = std::mem::replace(&mut odo.detector, Box::new(|_| Vec::new()));
+        let result = std::thread::scope(|s| -> Result<()> {
+            let (tx_img, rx_img) = std::sync::mpsc::sync_channel(1);
+            let (tx_det, rx_det) = std::sync::mpsc::sync_channel(1);
             s.spawn(move || {
                 for i in 0..n {
                     let frame = load(i);
                     let failed = frame.is_err();
-                    if tx.send(frame).is_err() || failed {
+                    if tx_img.send(frame).is_err() || failed {
                         break;
                     }
                 }
             });
-            for i in 0..n {
-                let img = rx.recv().map_err(|_| Error::Odometry(format!("frame {i} could not be read")))??;
-                out.push(odo.step(&img, poses.get(i))?);
-                progress(i + 1, n);
+            let detecting = s.spawn(move || {
+                for (i, frame) in rx_img.into_iter().enumerate() {
+                    // Frame 1 never re-detects (§5: it only sets R, t).
+                    let item = frame.map(|img| {
+                        let points = (first + i != 1).then(|| detector(&img));
+                        (img, points)
+                    });
+                    let failed = item.is_err();
+                    if tx_det.send(item).is_err() || failed {
+                        break;
+                    }
+                }
+                detector
+            });
+            let mut track = || -> Result<()> {
+                for i in 0..n {
+                    let (img, points) =
+                        rx_det.recv().map_err(|_| Error::Odometry(format!("frame {i} could not be read")))??;
+                    out.push(odo.step_detected(&img, poses.get(i), points)?);
+                    progress(i + 1, n);
+                }
+                Ok(())
+            };
+            let tracked = track();
+            // Unblock and stop the other stages, then take the detector back.
+            drop(rx_det);
+            match detecting.join() {
+                Ok(d) => odo.detector = d,
+                Err(_) => odo.detector = sift_detector(SiftParams::for_host()),
             }
-            Ok(())
-        })?;
+            tracked
+        });
+        result?;
     }
     #[cfg(target_arch = "wasm32")]
     for i in 0..n {
@@ -462,5 +512,35 @@ mod tests {
         let mut kitti = Odometry::with_detector(Camera::default(), Box::new(grid)).unwrap();
         let e = kitti.step(&frame(320, 240, 1.0, &cam), None).unwrap_err();
         assert!(e.to_string().contains("too small for the camera"), "{e}");
+    }
+
+    /// `run`'s pipeline (detection ahead on another thread) gives exactly
+    /// what stepping frame by frame gives, keeps the detector, and stops at
+    /// a frame that cannot be read with the earlier results kept in `odo`.
+    #[test]
+    fn pipelined_run_equals_stepping() {
+        let cam = Camera { fx: 300.0, fy: 300.0, cx: 160.0, cy: 120.0 };
+        let poses: Vec<PoseRow> = (0..6).map(|k| gt(0.7 * k as f64)).collect();
+        let img = |k: usize| frame(320, 240, 1.0 + 0.015 * k as f64, &cam);
+        let mut stepped = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+        stepped.min_points = 10_000;
+        let want: Vec<StepResult> = (0..6).map(|k| stepped.step(&img(k), Some(&poses[k])).unwrap()).collect();
+        let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+        odo.min_points = 10_000;
+        let mut seen = Vec::new();
+        let got = run(&mut odo, 6, &poses, |k| Ok(img(k)), &mut |d, n| seen.push((d, n))).unwrap();
+        assert_eq!(got, want);
+        assert!(got[2..].iter().all(|r| r.redetected));
+        assert_eq!(seen.last(), Some(&(6, 6)));
+        assert_eq!(odo.pose(), stepped.pose());
+        // The detector is back in place: a further step detects with it.
+        let r = odo.step(&img(6), Some(&gt(4.9))).unwrap();
+        assert!(r.redetected && r.points_out > 300);
+
+        let mut failing = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+        let e = run(&mut failing, 6, &poses, |k| if k == 3 { Err(Error::Odometry("frame 3 is broken".into())) } else { Ok(img(k)) }, &mut |_, _| {})
+            .unwrap_err();
+        assert!(e.to_string().contains("frame 3 is broken"), "{e}");
+        assert_eq!(failing.next_frame(), 3);
     }
 }
