@@ -1,63 +1,13 @@
-//! The tracker's window kernels in AVX2, bit-identical to the scalar ones.
-//!
-//! Windows are kept as 16-bit rows (every value fits: T, J ≤ 8160, |X|, |Y| ≤
-//! 4080, |J − T| ≤ 8160) in a column order chosen for `vpmaddwd`:
-//!
-//! ```text
-//! positions  0..8    columns 0 4 1 5 2 6 3 7      (block 0)
-//! positions  8..16   columns 8 12 9 13 10 14 11 15 (block 8)
-//! positions 16..24   columns 16 .. 23              (tail; 21..23 are scratch)
-//! ```
-//!
-//! so one multiply-add of a pair of positions gives `d(c)·Z(c) + d(c+4)·Z(c+4)`,
-//! the exact integer pair sum OpenCV's SSE loop rounds to f32 (§2.4 step 3).
-//! Bilinear interpolation is a `vpmaddwd` of (I(c), I(c+1)) pairs, shuffled
-//! straight into that order, with (w00, w01) and (w10, w11).
-//!
-//! OpenCV accumulates the sums in f32 in a fixed order, and a chain of 42 (or,
-//! in the scalar tail, 105) dependent f32 adds per iteration is what made the
-//! tracker slow. Here the sums are first taken as exact integers, together
-//! with a bound Σ|terms| per f32 accumulator. When the bound is ≤ 2^24, every
-//! term and every partial sum of OpenCV's running sum is an integer f32
-//! represents exactly, so each of its adds was exact and its result *is* the
-//! integer sum. Only when a bound exceeds 2^24 is the running sum replayed in
-//! OpenCV's order. Either way the bits are OpenCV's.
+//! The tracker's window kernels in AVX2, bit-identical to the scalar ones:
+//! 16-bit windows in the layout of [`super::wide`], `vpmaddwd` for the
+//! interpolation and the pair sums, exact integer sums with OpenCV's f32
+//! order replayed only where a bound requires it.
 
-use super::{Deriv, Kernels, Level, FLT_SCALE, WIN};
+use super::wide::{self, Acc, Patch, Row, Win16};
+use super::{Deriv, Kernels, Level, WIN};
 use std::arch::x86_64::*;
 
 pub struct Avx2;
-
-/// One window row in the layout above (positions 24..32 unused).
-#[repr(C, align(32))]
-#[derive(Clone, Copy)]
-pub struct Row([i16; 32]);
-
-type Win16 = [Row; WIN];
-
-/// Template T, gradients X, Y and their magnitudes, plus the last J − T.
-pub struct Patch {
-    t: Win16,
-    x: Win16,
-    y: Win16,
-    ax: Win16,
-    ay: Win16,
-    d: Win16,
-}
-
-/// Position of window column `c` in a [`Row`].
-#[inline(always)]
-fn pos(c: usize) -> usize {
-    if c < 16 {
-        let r = c % 8;
-        8 * (c / 8) + if r < 4 { 2 * r } else { 2 * (r - 4) + 1 }
-    } else {
-        c
-    }
-}
-
-/// Largest accumulator bound for which every partial sum is exact in f32.
-const EXACT: u64 = 1 << 24;
 
 /// (I(c), I(c+1)) pairs of one source row, as 32-bit lanes of two i16, in
 /// the order that packs to the row layout: `a` = columns 0 4 1 5 | 8 12 9 13,
@@ -221,59 +171,14 @@ unsafe fn warp_i16(p: *const i16, stride: usize, w: &[i32; 4], out: &mut Win16, 
     }
 }
 
-/// Horizontal sums of a block-part and a tail-part accumulator: the four
-/// column groups k (columns k, k+4, k+8, k+12: lanes k and 4+k) and the tail.
+/// A block vector and a tail vector as an [`Acc`].
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn groups(lo: __m256i, tail: __m128i) -> ([i64; 4], i64) {
-    let (mut l, mut t) = ([0i32; 8], [0i32; 4]);
-    _mm256_storeu_si256(l.as_mut_ptr() as *mut __m256i, lo);
-    _mm_storeu_si128(t.as_mut_ptr() as *mut __m128i, tail);
-    let g = |k: usize| l[k] as i64 + l[4 + k] as i64;
-    ([g(0), g(1), g(2), g(3)], t.iter().map(|&v| v as i64).sum())
-}
-
-/// Whether each column group's bound (lanes k and 4+k; non-negative, may
-/// exceed i32 once combined) allows exact integer sums.
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn lanes_exact(bound: __m256i) -> bool {
-    let mut l = [0u32; 8];
-    _mm256_storeu_si256(l.as_mut_ptr() as *mut __m256i, bound);
-    (0..4).all(|k| l[k] as u64 + l[4 + k] as u64 <= EXACT)
-}
-
-/// The same for the tail (one running sum over columns 16..20).
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn tail_exact(bound: __m128i) -> bool {
-    let mut t = [0u32; 4];
-    _mm_storeu_si128(t.as_mut_ptr() as *mut __m128i, bound);
-    t.iter().map(|&v| v as u64).sum::<u64>() <= EXACT
-}
-
-/// OpenCV's tensor lanes L0..L3 of ΣA·B, replayed term by term: columns
-/// 0..15 in column order, column c into lane c mod 4 (§2.4 "Structure tensor").
-fn tensor_lanes_replay(a: &Win16, b: &Win16) -> [f32; 4] {
-    let mut l = [0f32; 4];
-    for (ra, rb) in a.iter().zip(b) {
-        for c in 0..16 {
-            l[c % 4] += (ra.0[pos(c)] as i32 * rb.0[pos(c)] as i32) as f32;
-        }
-    }
-    l
-}
-
-/// The scalar running sum over columns 16..20, row by row (tensor S, and
-/// s1/s2 of the mismatch with `a` = J − T).
-fn tail_replay(a: &Win16, b: &Win16) -> f32 {
-    let mut s = 0f32;
-    for (ra, rb) in a.iter().zip(b) {
-        for c in 16..WIN {
-            s += (ra.0[c] as i32 * rb.0[c] as i32) as f32;
-        }
-    }
-    s
+unsafe fn acc(blocks: __m256i, tail: __m128i) -> Acc {
+    let mut a = Acc::default();
+    _mm256_storeu_si256(a.blocks.as_mut_ptr() as *mut __m256i, blocks);
+    _mm_storeu_si128(a.tail.as_mut_ptr() as *mut __m128i, tail);
+    a
 }
 
 #[target_feature(enable = "avx2")]
@@ -324,37 +229,12 @@ unsafe fn load_patch(
         txy = _mm_add_epi32(txy, _mm_madd_epi16(tx, tg));
         tbxy = _mm_add_epi32(tbxy, _mm_madd_epi16(tax, tay));
     }
+    let (xx, xy, yy, bxy) = (acc(xx, txx), acc(xy, txy), acc(yy, tyy), acc(bxy, tbxy));
     (
-        tensor_sum(xx, txx, xx, txx, &p.x, &p.x),
-        tensor_sum(xy, txy, bxy, tbxy, &p.x, &p.y),
-        tensor_sum(yy, tyy, yy, tyy, &p.y, &p.y),
+        wide::tensor_sum(&xx, &xx, &p.x, &p.x),
+        wide::tensor_sum(&xy, &bxy, &p.x, &p.y),
+        wide::tensor_sum(&yy, &yy, &p.y, &p.y),
     )
-}
-
-/// One tensor sum: lanes and tail each from exact integers, or replayed in
-/// OpenCV's order when their bound fails.
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn tensor_sum(
-    lo: __m256i,
-    tail: __m128i,
-    bound_lo: __m256i,
-    bound_tail: __m128i,
-    a: &Win16,
-    b: &Win16,
-) -> f32 {
-    let (g, s) = groups(lo, tail);
-    let l = if lanes_exact(bound_lo) {
-        g.map(|v| v as f32)
-    } else {
-        tensor_lanes_replay(a, b)
-    };
-    let s = if tail_exact(bound_tail) {
-        s as f32
-    } else {
-        tail_replay(a, b)
-    };
-    s + ((l[0] + l[2]) + (l[1] + l[3]))
 }
 
 /// OpenCV's T0..T3 (= P + Q: X of groups 0+2, Y of 0+2, X of 1+3, Y of
@@ -414,38 +294,9 @@ unsafe fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) 
         tbx = _mm_add_epi32(tbx, _mm_madd_epi16(tad, taxr));
         tby = _mm_add_epi32(tby, _mm_madd_epi16(tad, tayr));
     }
-    let (gx, ex) = groups(sx, tx);
-    let (gy, ey) = groups(sy, ty);
-    let mut t = [
-        gx[0] as f32 + gx[2] as f32,
-        gy[0] as f32 + gy[2] as f32,
-        gx[1] as f32 + gx[3] as f32,
-        gy[1] as f32 + gy[3] as f32,
-    ];
-    let (lanes_x, lanes_y) = (lanes_exact(bx), lanes_exact(by));
-    if !(lanes_x && lanes_y) {
-        let r = mismatch_lanes_replay(p);
-        if !lanes_x {
-            (t[0], t[2]) = (r[0], r[2]);
-        }
-        if !lanes_y {
-            (t[1], t[3]) = (r[1], r[3]);
-        }
-    }
-    let s1 = if tail_exact(tbx) {
-        ex as f32
-    } else {
-        tail_replay(&p.d, &p.x)
-    };
-    let s2 = if tail_exact(tby) {
-        ey as f32
-    } else {
-        tail_replay(&p.d, &p.y)
-    };
-    (
-        (s1 + (t[0] + t[2])) * FLT_SCALE,
-        (s2 + (t[1] + t[3])) * FLT_SCALE,
-    )
+    let (sx, sy, bx, by) = (acc(sx, tx), acc(sy, ty), acc(bx, tbx), acc(by, tby));
+    // SAFETY (the closure): AVX2 is enabled in this function.
+    wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| unsafe { mismatch_lanes_replay(p) })
 }
 
 #[target_feature(enable = "avx2")]
@@ -456,40 +307,24 @@ unsafe fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) 
     let (wt, wb) = weight_pairs(w);
     let ones = _mm256_set1_epi16(1);
     let tail_ones = _mm_setr_epi16(1, 1, 1, 1, 1, 0, 0, 0);
-    let (mut acc, mut tacc) = (_mm256_setzero_si256(), _mm_setzero_si128());
+    let (mut total, mut tail_total) = (_mm256_setzero_si256(), _mm_setzero_si128());
     let mut top = pairs_u8(src);
     for y in 0..WIN {
         let bot = pairs_u8(src.add((y + 1) * next.stride));
         let (j, tj) = blend::<9>(&top, &bot, wt, wb);
         top = bot;
         let (t, tt) = load(&p.t[y]);
-        acc = _mm256_add_epi32(
-            acc,
-            _mm256_madd_epi16(_mm256_abs_epi16(_mm256_sub_epi16(j, t)), ones),
-        );
-        tacc = _mm_add_epi32(
-            tacc,
-            _mm_madd_epi16(_mm_abs_epi16(_mm_sub_epi16(tj, tt)), tail_ones),
-        );
+        total = _mm256_add_epi32(total, _mm256_madd_epi16(_mm256_abs_epi16(_mm256_sub_epi16(j, t)), ones));
+        tail_total = _mm_add_epi32(tail_total, _mm_madd_epi16(_mm_abs_epi16(_mm_sub_epi16(tj, tt)), tail_ones));
     }
-    // ≤ 441·8160 < 2^24: OpenCV's row-major f32 running sum is this integer.
-    let (g, s) = groups(acc, tacc);
-    (g.iter().sum::<i64>() + s) as f32
+    wide::abs_diff_total(&acc(total, tail_total))
 }
 
 impl Kernels for Avx2 {
     type Patch = Patch;
 
     fn new_patch() -> Box<Patch> {
-        let zero = [Row([0; 32]); WIN];
-        Box::new(Patch {
-            t: zero,
-            x: zero,
-            y: zero,
-            ax: zero,
-            ay: zero,
-            d: zero,
-        })
+        Patch::new_boxed()
     }
 
     #[inline(always)]
@@ -521,21 +356,9 @@ impl Kernels for Avx2 {
 
 #[cfg(test)]
 mod tests {
+    use super::super::wide::{pos, EXACT};
     use super::super::{weights, Deriv, Kernels, Level, Scalar};
     use super::*;
-
-    #[test]
-    fn the_row_layout_pairs_each_column_with_the_one_four_further() {
-        let mut seen = [false; 24];
-        for c in 0..24 {
-            assert!(!seen[pos(c)]);
-            seen[pos(c)] = true;
-        }
-        for c in [0, 1, 2, 3, 8, 9, 10, 11] {
-            assert_eq!(pos(c + 4), pos(c) + 1);
-            assert_eq!(pos(c) % 2, 0);
-        }
-    }
 
     /// A level of smooth texture plus `noise` (0..=255) of xorshift noise:
     /// noise makes gradients and residuals large enough to overflow the
@@ -603,6 +426,11 @@ mod tests {
                     [b.0.to_bits(), b.1.to_bits()],
                     "mismatch ({ix}, {iy}) → ({jx}, {jy}), noise {noise}"
                 );
+                // The portable replay of OpenCV's lane order (what wasm
+                // uses) against this module's vector one, on this J − T.
+                // SAFETY: AVX2 checked at the top.
+                let (r, q) = (wide::mismatch_lanes_replay(&vp), unsafe { mismatch_lanes_replay(&vp) });
+                assert_eq!(r.map(f32::to_bits), q.map(f32::to_bits));
                 let a = Scalar::abs_diff_sum(&next, jx, jy, &w1, &mut sp);
                 let b = Avx2::abs_diff_sum(&next, jx, jy, &w1, &mut vp);
                 assert_eq!(a.to_bits(), b.to_bits());

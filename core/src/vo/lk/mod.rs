@@ -405,6 +405,10 @@ impl Kernels for Scalar {
 
 #[cfg(target_arch = "x86_64")]
 mod avx2;
+#[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+mod simd128;
+#[cfg(any(target_arch = "x86_64", all(target_arch = "wasm32", target_feature = "simd128")))]
+mod wide;
 
 /// Window buffers reused across points (every element is written before
 /// it is read).
@@ -509,8 +513,7 @@ struct Job<'a> {
     max_level: usize,
     crit: (usize, f64),
     min_eig: f32,
-    /// Forces the scalar kernels (tests compare both paths; wasm has only those).
-    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
+    /// Forces the scalar kernels (tests compare both paths).
     scalar: bool,
 }
 
@@ -545,6 +548,12 @@ fn run_job(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
             // SAFETY: the CPU supports AVX2 (checked just above).
             unsafe { run_job_avx2(job, np, st, er) };
             return;
+        }
+    }
+    #[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+    {
+        if !job.scalar {
+            return run_job_body::<simd128::Simd128>(job, np, st, er);
         }
     }
     run_job_body::<Scalar>(job, np, st, er)
@@ -765,79 +774,7 @@ mod tests {
         assert_eq!(out.status, vec![false]);
     }
 
-    /// calcOpticalFlowPyrLK(lk_prev.png, lk_next.png, ...) from the 4.8.0.76
-    /// wheel (testdata/gen_goldens.py): input point, output x/y f32 bits,
-    /// status, err f32 bits (status-1 points only; status-0 err is garbage).
-    const LK_GOLDEN: &[([f32; 2], [u32; 2], u8, u32)] = &[
-        ([12.25, 9.5], [0x411d2c23, 0x4131d214], 1, 0x3efec435),
-        ([49.25, 9.5], [0x423b60e8, 0x4131aca0], 1, 0x3ec27795),
-        ([86.25, 9.5], [0x42a7b2c5, 0x4131b715], 1, 0x3edc4ca0),
-        ([123.25, 9.5], [0x42f1ab60, 0x4131a8ed], 1, 0x3ed6acfd),
-        ([160.25, 9.5], [0x431dd9ea, 0x4131ca61], 1, 0x3ed542c2),
-        ([197.25, 9.5], [0x4342d83c, 0x4131bf57], 1, 0x3ec526e5),
-        ([234.25, 9.5], [0x4367d714, 0x4131912c], 1, 0x3ed5ce14),
-        ([271.25, 9.5], [0x43866ce8, 0x41319164], 1, 0x3ec8da44),
-        ([308.25, 9.5], [0x4398ec06, 0x4131a996], 1, 0x3eb8d0fb),
-        ([12.25, 45.5], [0x411d7b8c, 0x423c6160], 1, 0x3edb078c),
-        ([49.25, 45.5], [0x423b5f54, 0x423c6394], 1, 0x3ec0cc56),
-        ([86.25, 45.5], [0x42a7b1f8, 0x423c679b], 1, 0x3eccc55f),
-        ([123.25, 45.5], [0x42f1a6bb, 0x423c72c6], 1, 0x3eb00000),
-        ([160.25, 45.5], [0x431dd811, 0x423c63f9], 1, 0x3ec1e2fa),
-        ([197.25, 45.5], [0x4342d96c, 0x423c658c], 1, 0x3edb2369),
-        ([234.25, 45.5], [0x4367d972, 0x423c6b9a], 1, 0x3eb92492),
-        ([271.25, 45.5], [0x43866c11, 0x423c66e0], 1, 0x3ed542c2),
-        ([308.25, 45.5], [0x4398ec71, 0x423c6748], 1, 0x3ee9d50b),
-        ([12.25, 81.5], [0x411d646f, 0x42a638ed], 1, 0x3f03804a),
-        ([49.25, 81.5], [0x423b622e, 0x42a62eeb], 1, 0x3ed69a6a),
-        ([86.25, 81.5], [0x42a7b2d8, 0x42a634fe], 1, 0x3ebe6754),
-        ([123.25, 81.5], [0x42f1b480, 0x42a632d8], 1, 0x3ee5fc84),
-        ([160.25, 81.5], [0x431dd7db, 0x42a6340c], 1, 0x3ef6501c),
-        ([197.25, 81.5], [0x4342d94d, 0x42a631aa], 1, 0x3ec7b10d),
-        ([234.25, 81.5], [0x4367d735, 0x42a62e7d], 1, 0x3ec6343f),
-        ([271.25, 81.5], [0x43866b51, 0x42a62b94], 1, 0x3eb3280e),
-        ([308.25, 81.5], [0x4398eae1, 0x42a6336d], 1, 0x3ebcc55f),
-        ([12.25, 117.5], [0x411d76da, 0x42ee3321], 1, 0x3eeb35fd),
-        ([49.25, 117.5], [0x423b6de0, 0x42ee3138], 1, 0x3ed8f622),
-        ([86.25, 117.5], [0x42a7b570, 0x42ee34c3], 1, 0x3eb583c6),
-        ([123.25, 117.5], [0x42f1b72b, 0x42ee3999], 1, 0x3ebaebaf),
-        ([160.25, 117.5], [0x431dd7c1, 0x42ee3273], 1, 0x3eb0f17d),
-        ([197.25, 117.5], [0x4342d6ba, 0x42ee30af], 1, 0x3ebacfd2),
-        ([234.25, 117.5], [0x4367d7a8, 0x42ee301c], 1, 0x3ed5c4ca),
-        ([271.25, 117.5], [0x43866c71, 0x42ee358f], 1, 0x3ecac688),
-        ([308.25, 117.5], [0x4398ec3e, 0x42ee32a1], 1, 0x3eba1f59),
-        ([12.25, 153.5], [0x411d64a6, 0x431b1a4d], 1, 0x3ec6ee01),
-        ([49.25, 153.5], [0x423b6a1d, 0x431b1869], 1, 0x3eda8ecd),
-        ([86.25, 153.5], [0x42a7ab4f, 0x431b1c7d], 1, 0x3ed39783),
-        ([123.25, 153.5], [0x42f1afb4, 0x431b199b], 1, 0x3ee0949c),
-        ([160.25, 153.5], [0x431dd791, 0x431b18dc], 1, 0x3ea3280e),
-        ([197.25, 153.5], [0x4342d76e, 0x431b1a2c], 1, 0x3ec30c31),
-        ([234.25, 153.5], [0x4367d874, 0x431b1a7d], 1, 0x3ec1a1f6),
-        ([271.25, 153.5], [0x43866cd5, 0x431b1a02], 1, 0x3ed98174),
-        ([308.25, 153.5], [0x4398ebaa, 0x431b1716], 1, 0x3ebafe42),
-        ([12.25, 189.5], [0x411d7669, 0x433f1937], 1, 0x3f00abd4),
-        ([49.25, 189.5], [0x423b675a, 0x433f1a9b], 1, 0x3e9c7b11),
-        ([86.25, 189.5], [0x42a7b02e, 0x433f180a], 1, 0x3ec66bf9),
-        ([123.25, 189.5], [0x42f1b856, 0x433f18e5], 1, 0x3eb81738),
-        ([160.25, 189.5], [0x431dd2b7, 0x433f17b5], 1, 0x3ee6c8da),
-        ([197.25, 189.5], [0x4342d987, 0x433f193c], 1, 0x3ea62af5),
-        ([234.25, 189.5], [0x4367d830, 0x433f1acf], 1, 0x3ed157a8),
-        ([271.25, 189.5], [0x43866b03, 0x433f1708], 1, 0x3ecdad92),
-        ([308.25, 189.5], [0x4398eb65, 0x433f1b63], 1, 0x3ece422d),
-        ([12.25, 225.5], [0x411d67ec, 0x43631b34], 1, 0x3eb8e38e),
-        ([49.25, 225.5], [0x423b5fcf, 0x4363194b], 1, 0x3ed77009),
-        ([86.25, 225.5], [0x42a7b89b, 0x436318a9], 1, 0x3ef3eb1a),
-        ([123.25, 225.5], [0x42f1b138, 0x43631968], 1, 0x3eadc025),
-        ([160.25, 225.5], [0x431dd717, 0x43631cf2], 1, 0x3ebda448),
-        ([197.25, 225.5], [0x4342d740, 0x4363197f], 1, 0x3ee05ce1),
-        ([234.25, 225.5], [0x4367d42a, 0x436317e3], 1, 0x3ed91b49),
-        ([271.25, 225.5], [0x43866c0e, 0x43631a5b], 1, 0x3ee6acfd),
-        ([308.25, 225.5], [0x4398eb05, 0x43631ace], 1, 0x3eb384ef),
-        ([-15.0, 100.0], [0xc1c169e6, 0x42cd125f], 0, 0x00000000),
-        ([330.0, 20.0], [0x43a3cb02, 0x41ac688a], 0, 0x00000000),
-        ([160.0, -30.0], [0x431d8c81, 0xc1e464d8], 0, 0x00000000),
-        ([3.75, 236.5], [0x3fb44350, 0x436e28e9], 1, 0x41124199),
-        ([318.0, 2.0], [0x439dcd05, 0x40660546], 1, 0x411f6b64),
-    ];
+    include!("../testdata/lk_golden.rs");
 
     /// The AVX2 tracker against the portable one on a KITTI-sized pair (the
     /// committed synthetic frames 0 → 1), on a grid of 640 points covering
