@@ -9,7 +9,8 @@ with `cargo build --release --bin siftlab`), alternating K times, and reports fo
 the absolute trajectory error (RMSE of the position differences to the ground truth, no
 alignment, GT scale as the lab uses it), the frame-by-frame distance between the two estimates
 (max / median / at the last frame), and frames per second (best of K, whole loop with image
-reading; ours includes process start-up) with the ratio ours / OpenCV.
+reading; ours includes process start-up) with the ratio ours / OpenCV, plus the ratio of each
+back-to-back round and their median (the figure to quote on a machine whose speed drifts).
 
 The dataset defaults to ../shared/data/MyKITTI when it exists, else target/synthkitti
 (generate it with tests/scripts/gen_synthkitti.py --out target/synthkitti).
@@ -106,6 +107,10 @@ def main():
         "cpus": os.cpu_count(),
     }
     res["fps_ratio"] = res["fps_ours"] / res["fps_opencv"]
+    # This VM's speed drifts by up to 1.6x within minutes: the ratio of each
+    # back-to-back round is the figure to trust, not ratios of bests.
+    res["round_ratios"] = [c / o for c, o in zip(t_cv, t_ours)]
+    res["median_round_ratio"] = statistics.median(res["round_ratios"])
     if args.json:
         print(json.dumps(res))
         return
@@ -117,6 +122,8 @@ def main():
           % (*res["final_ours"], *res["final_opencv"], *res["final_gt"]))
     print("speed (best of %d): siftlab %.2f frames/s, OpenCV %.2f frames/s, ratio %.2fx"
           % (len(t_ours), res["fps_ours"], res["fps_opencv"], res["fps_ratio"]))
+    print("per-round ratios (OpenCV time / siftlab time, back to back): %s; median %.2fx"
+          % (", ".join("%.2f" % r for r in res["round_ratios"]), res["median_round_ratio"]))
 
 
 if __name__ == "__main__":
