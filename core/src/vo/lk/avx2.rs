@@ -171,14 +171,31 @@ unsafe fn warp_i16(p: *const i16, stride: usize, w: &[i32; 4], out: &mut Win16, 
     }
 }
 
-/// A block vector and a tail vector as an [`Acc`].
-#[target_feature(enable = "avx2")]
-#[inline]
-unsafe fn acc(blocks: __m256i, tail: __m128i) -> Acc {
-    let mut a = Acc::default();
-    _mm256_storeu_si256(a.blocks.as_mut_ptr() as *mut __m256i, blocks);
-    _mm_storeu_si128(a.tail.as_mut_ptr() as *mut __m128i, tail);
-    a
+/// Running i32 sums of pairwise products of rows (block part, tail part).
+struct Sum(__m256i, __m128i);
+
+impl Sum {
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn new() -> Sum {
+        Sum(_mm256_setzero_si256(), _mm_setzero_si128())
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn add(&mut self, a: (__m256i, __m128i), b: (__m256i, __m128i)) {
+        self.0 = _mm256_add_epi32(self.0, _mm256_madd_epi16(a.0, b.0));
+        self.1 = _mm_add_epi32(self.1, _mm_madd_epi16(a.1, b.1));
+    }
+
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    unsafe fn acc(&self) -> Acc {
+        let mut a = Acc::default();
+        _mm256_storeu_si256(a.blocks.as_mut_ptr() as *mut __m256i, self.0);
+        _mm_storeu_si128(a.tail.as_mut_ptr() as *mut __m128i, self.1);
+        a
+    }
 }
 
 #[target_feature(enable = "avx2")]
@@ -211,25 +228,15 @@ unsafe fn load_patch(
     );
 
     // X², Y² are their own bounds; XY is bounded by |X||Y|.
-    let z = _mm256_setzero_si256();
-    let (mut xx, mut yy, mut xy, mut bxy) = (z, z, z, z);
-    let z4 = _mm_setzero_si128();
-    let (mut txx, mut tyy, mut txy, mut tbxy) = (z4, z4, z4, z4);
+    let (mut xx, mut yy, mut xy, mut bxy) = (Sum::new(), Sum::new(), Sum::new(), Sum::new());
     for y in 0..WIN {
-        let (x, tx) = load(&p.x[y]);
-        let (g, tg) = load(&p.y[y]);
-        let (ax, tax) = load(&p.ax[y]);
-        let (ay, tay) = load(&p.ay[y]);
-        xx = _mm256_add_epi32(xx, _mm256_madd_epi16(x, x));
-        yy = _mm256_add_epi32(yy, _mm256_madd_epi16(g, g));
-        xy = _mm256_add_epi32(xy, _mm256_madd_epi16(x, g));
-        bxy = _mm256_add_epi32(bxy, _mm256_madd_epi16(ax, ay));
-        txx = _mm_add_epi32(txx, _mm_madd_epi16(tx, tx));
-        tyy = _mm_add_epi32(tyy, _mm_madd_epi16(tg, tg));
-        txy = _mm_add_epi32(txy, _mm_madd_epi16(tx, tg));
-        tbxy = _mm_add_epi32(tbxy, _mm_madd_epi16(tax, tay));
+        let (x, g) = (load(&p.x[y]), load(&p.y[y]));
+        xx.add(x, x);
+        yy.add(g, g);
+        xy.add(x, g);
+        bxy.add(load(&p.ax[y]), load(&p.ay[y]));
     }
-    let (xx, xy, yy, bxy) = (acc(xx, txx), acc(xy, txy), acc(yy, tyy), acc(bxy, tbxy));
+    let (xx, xy, yy, bxy) = (xx.acc(), xy.acc(), yy.acc(), bxy.acc());
     (
         wide::tensor_sum(&xx, &xx, &p.x, &p.x),
         wide::tensor_sum(&xy, &bxy, &p.x, &p.y),
@@ -268,33 +275,22 @@ unsafe fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) 
     let src = next.padded[base..].as_ptr();
     let stride = next.stride;
     let (wt, wb) = weight_pairs(w);
-    let z = _mm256_setzero_si256();
-    let z4 = _mm_setzero_si128();
-    let (mut sx, mut sy, mut bx, mut by) = (z, z, z, z);
-    let (mut tx, mut ty, mut tbx, mut tby) = (z4, z4, z4, z4);
+    let (mut sx, mut sy, mut bx, mut by) = (Sum::new(), Sum::new(), Sum::new(), Sum::new());
     let mut top = pairs_u8(src);
     for y in 0..WIN {
         let bot = pairs_u8(src.add((y + 1) * stride));
         let (j, tj) = blend::<9>(&top, &bot, wt, wb);
         top = bot;
         let (t, tt) = load(&p.t[y]);
-        let (d, td) = (_mm256_sub_epi16(j, t), _mm_sub_epi16(tj, tt));
-        store(&mut p.d[y], d, td);
-        let (x, txr) = load(&p.x[y]);
-        let (g, tgr) = load(&p.y[y]);
-        let (ax, taxr) = load(&p.ax[y]);
-        let (ay, tayr) = load(&p.ay[y]);
-        let (ad, tad) = (_mm256_abs_epi16(d), _mm_abs_epi16(td));
-        sx = _mm256_add_epi32(sx, _mm256_madd_epi16(d, x));
-        sy = _mm256_add_epi32(sy, _mm256_madd_epi16(d, g));
-        bx = _mm256_add_epi32(bx, _mm256_madd_epi16(ad, ax));
-        by = _mm256_add_epi32(by, _mm256_madd_epi16(ad, ay));
-        tx = _mm_add_epi32(tx, _mm_madd_epi16(td, txr));
-        ty = _mm_add_epi32(ty, _mm_madd_epi16(td, tgr));
-        tbx = _mm_add_epi32(tbx, _mm_madd_epi16(tad, taxr));
-        tby = _mm_add_epi32(tby, _mm_madd_epi16(tad, tayr));
+        let d = (_mm256_sub_epi16(j, t), _mm_sub_epi16(tj, tt));
+        store(&mut p.d[y], d.0, d.1);
+        sx.add(d, load(&p.x[y]));
+        sy.add(d, load(&p.y[y]));
+        let ad = (_mm256_abs_epi16(d.0), _mm_abs_epi16(d.1));
+        bx.add(ad, load(&p.ax[y]));
+        by.add(ad, load(&p.ay[y]));
     }
-    let (sx, sy, bx, by) = (acc(sx, tx), acc(sy, ty), acc(bx, tbx), acc(by, tby));
+    let (sx, sy, bx, by) = (sx.acc(), sy.acc(), bx.acc(), by.acc());
     // SAFETY (the closure): AVX2 is enabled in this function.
     wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| unsafe { mismatch_lanes_replay(p) })
 }
@@ -307,17 +303,17 @@ unsafe fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) 
     let (wt, wb) = weight_pairs(w);
     let ones = _mm256_set1_epi16(1);
     let tail_ones = _mm_setr_epi16(1, 1, 1, 1, 1, 0, 0, 0);
-    let (mut total, mut tail_total) = (_mm256_setzero_si256(), _mm_setzero_si128());
+    let mut total = Sum::new();
     let mut top = pairs_u8(src);
     for y in 0..WIN {
         let bot = pairs_u8(src.add((y + 1) * next.stride));
         let (j, tj) = blend::<9>(&top, &bot, wt, wb);
         top = bot;
         let (t, tt) = load(&p.t[y]);
-        total = _mm256_add_epi32(total, _mm256_madd_epi16(_mm256_abs_epi16(_mm256_sub_epi16(j, t)), ones));
-        tail_total = _mm_add_epi32(tail_total, _mm_madd_epi16(_mm_abs_epi16(_mm_sub_epi16(tj, tt)), tail_ones));
+        let ad = (_mm256_abs_epi16(_mm256_sub_epi16(j, t)), _mm_abs_epi16(_mm_sub_epi16(tj, tt)));
+        total.add(ad, (ones, tail_ones));
     }
-    wide::abs_diff_total(&acc(total, tail_total))
+    wide::abs_diff_total(&total.acc())
 }
 
 impl Kernels for Avx2 {
