@@ -117,14 +117,13 @@ fn blur_rows(
     let mut buf = super::image::Plane::for_overwrite((band.min(n) + 2 * c) * w, 1);
     let buf = &mut buf.data;
     let mut padded = vec![0f32; w + 2 * r];
-    let padded = &mut padded[..];
     for b0 in (0..n).step_by(band) {
         let b1 = (b0 + band).min(n);
         let (ya, yb) = ((y0 + b0) as isize, (y0 + b1) as isize);
         // Buffer row j holds the row pass of source row ya − c + j, reflected
         // into the image as the column filter's border rule does.
         for (j, v) in (ya - c as isize..yb + c as isize).enumerate() {
-            row_filter(src.row(reflect101(v, h)), kx, padded, &mut buf[j * w..(j + 1) * w]);
+            row_filter(src.row(reflect101(v, h)), kx, &mut padded, &mut buf[j * w..(j + 1) * w]);
         }
         let row = |m: usize, x0: usize, x1: usize| &buf[m * w + x0..m * w + x1];
         let mut pairs: Vec<(&[f32], &[f32])> = Vec::with_capacity(c);

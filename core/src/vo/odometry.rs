@@ -195,7 +195,7 @@ impl Odometry {
             None
         };
 
-        let Odometry { detector, refs: prev_refs, cam, lk, ransac, .. } = self;
+        let Odometry { refs: prev_refs, cam, lk, ransac, .. } = self;
         let track = || -> Result<Tracked> {
             let pyr = Pyramid::new(img, lk.max_level);
             let flow = calc_optical_flow_pyr_lk_pyramids(&last.1, &pyr, prev_refs, lk);
@@ -224,15 +224,9 @@ impl Odometry {
                 .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
             Ok(Tracked { pyr, refs, cur, ess, pose })
         };
-        // From frame 2 on the lab re-detects whenever fewer than 1500 points
-        // were tracked, which is nearly always: natively the detector runs on
-        // another thread while this one tracks (same results, less waiting).
-        let speculate = scale.is_some() && detected.is_none();
-        let (tracked, beside) = run_beside(speculate, detector, img, track);
-        if beside.is_some() {
-            detected = beside;
-        }
-        let Tracked { pyr, refs, cur, ess, pose } = tracked?;
+        // `run` detects on another thread ahead of this one; a caller of
+        // `step` gets the detection below, only when the loop needs it.
+        let Tracked { pyr, refs, cur, ess, pose } = track()?;
         res.points_in = self.refs.len();
         res.tracked = cur.len();
         res.essential_inliers = ess.inliers;
@@ -313,35 +307,6 @@ struct Tracked {
     pose: super::recover_pose::Pose,
 }
 
-/// Runs `work` and, if `also_detect`, the detector on `img` on a second
-/// thread (native only; on wasm the caller detects later if needed).
-fn run_beside<T>(
-    also_detect: bool,
-    detector: &mut Detector,
-    img: &GrayImage,
-    work: impl FnOnce() -> T,
-) -> (T, Option<Vec<[f32; 2]>>) {
-    if !also_detect {
-        return (work(), None);
-    }
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        std::thread::scope(|s| {
-            let handle = s.spawn(|| detector(img));
-            let out = work();
-            // A panicking detector is a bug; fall back to detecting here.
-            let points = handle.join().ok();
-            (out, points)
-        })
-    }
-    #[cfg(target_arch = "wasm32")]
-    {
-        // No threads: detect afterwards, and only if the loop needs it.
-        let _ = (detector, img);
-        (work(), None)
-    }
-}
-
 /// Runs the loop over frames `0..n`, loading each with `load(i)`; `progress`
 /// gets (done, total) after every frame. Returns the per-frame results.
 pub fn run(
@@ -399,10 +364,8 @@ pub fn run(
             let tracked = track();
             // Unblock and stop the other stages, then take the detector back.
             drop(rx_det);
-            match detecting.join() {
-                Ok(d) => odo.detector = d,
-                Err(_) => odo.detector = sift_detector(SiftParams::for_host()),
-            }
+            // A panicking detector is a bug: let it surface as one.
+            odo.detector = detecting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
             tracked
         });
         result?;
