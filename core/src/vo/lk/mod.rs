@@ -345,8 +345,8 @@ fn out_of_bounds(ix: i32, iy: i32, w: usize, h: usize) -> bool {
 /// stored estimate, updated in place; `status`/`err` are only touched at
 /// level 0.
 /// The window kernels of one point and level. [`Scalar`] is the reference
-/// (and what wasm runs); `avx2::Avx2` keeps 16-bit windows in its own column
-/// layout and gets the same bits (see that module).
+/// (and what wasm without SIMD runs); `avx2::Avx2` and `simd128::Simd128` keep
+/// 16-bit windows in the column layout of `wide` and get the same bits.
 trait Kernels {
     /// The template and gradient windows of one point at one level.
     type Patch;
