@@ -609,7 +609,8 @@ pub fn calc_optical_flow_pyr_lk(
     lk_from_images(prev, next, pts, params, false)
 }
 
-/// The same call with the portable kernels only (what wasm runs).
+/// The same call with the portable scalar kernels only (the reference the
+/// vector kernels are tested against; what wasm without SIMD runs).
 pub fn calc_optical_flow_pyr_lk_portable(
     prev: &GrayImage,
     next: &GrayImage,
@@ -823,7 +824,7 @@ mod tests {
         let next = GrayImage::decode(include_bytes!("../testdata/lk_next.png")).unwrap();
         let pts: Vec<[f32; 2]> = LK_GOLDEN.iter().map(|g| g.0).collect();
         let out = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
-        // The portable kernels (wasm, CPUs without AVX2) give the same bits.
+        // The portable kernels (CPUs without AVX2, wasm without SIMD) give the same bits.
         assert_eq!(calc_optical_flow_pyr_lk_portable(&prev, &next, &pts, &LkParams::default()), out);
         let mut exact = 0;
         for (i, g) in LK_GOLDEN.iter().enumerate() {
