@@ -48,20 +48,6 @@ fn reflect101(mut p: isize, len: usize) -> usize {
 
 /// GaussianBlur(src, σ) with the same σ in x and y.
 pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
-    blur(src, sigma, false).0
-}
-
-/// GaussianBlur(src, σ) and the difference blur − src (the DoG level SIFT
-/// takes next), subtracted row by row while the blurred row is still in L1
-/// rather than in a second pass over both planes. Same values as
-/// [`gaussian_blur`] followed by a plain f32 subtraction.
-pub fn gaussian_blur_and_difference(src: &Plane, sigma: f64) -> (Plane, Plane) {
-    let (blurred, diff) = blur(src, sigma, true);
-    let diff = diff.unwrap_or_else(|| Plane::new(src.width, src.height));
-    (blurred, diff)
-}
-
-fn blur(src: &Plane, sigma: f64, with_diff: bool) -> (Plane, Option<Plane>) {
     let (w, h) = (src.width, src.height);
     let kernel = gaussian_kernel(sigma);
     // A single row or column gets a size-1 kernel on that axis (OpenCV's
@@ -69,28 +55,15 @@ fn blur(src: &Plane, sigma: f64, with_diff: bool) -> (Plane, Option<Plane>) {
     let kx: Vec<f32> = if w == 1 { vec![1.0] } else { kernel.clone() };
     let ky: Vec<f32> = if h == 1 { vec![1.0] } else { kernel };
     let mut out = Plane::for_overwrite(w, h);
-    let mut diff = with_diff.then(|| Plane::for_overwrite(w, h));
     if w == 0 || h == 0 {
-        return (out, diff);
+        return out;
     }
     if kx.len() == 1 && ky.len() == 1 {
         out.data.copy_from_slice(&src.data);
-        if let Some(d) = diff.as_mut() {
-            for (d, &a) in d.data.iter_mut().zip(&src.data) {
-                *d = a - a;
-            }
-        }
-        return (out, diff);
+        return out;
     }
-    let diff_data: &mut [f32] = match diff.as_mut() {
-        Some(d) => &mut d.data,
-        None => &mut [],
-    };
-    let minus = with_diff.then_some(src);
-    super::par::for_each_chunk_pair(&mut out.data, diff_data, w, |y0, chunk, diff_chunk| {
-        blur_rows(src, &kx, &ky, minus, y0, chunk, diff_chunk);
-    });
-    (out, diff)
+    super::par::for_each_chunk(&mut out.data, w, |y0, chunk| blur_rows(src, &kx, &ky, y0, chunk));
+    out
 }
 
 /// Output rows `y0..` (as many as `out` holds) of the separable filter, in
@@ -99,15 +72,7 @@ fn blur(src: &Plane, sigma: f64, with_diff: bool) -> (Plane, Option<Plane>) {
 /// pass reads it from there. Two passes over a whole intermediate plane
 /// would move 15 MB more per blur of a KITTI first octave through memory,
 /// which bounds this stage on a 2-core machine.
-fn blur_rows(
-    src: &Plane,
-    kx: &[f32],
-    ky: &[f32],
-    minus: Option<&Plane>,
-    y0: usize,
-    out: &mut [f32],
-    diff: &mut [f32],
-) {
+fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
     let (w, h) = (src.width, src.height);
     let (r, c) = (kx.len() / 2, ky.len() / 2);
     let n = out.len() / w;
@@ -138,37 +103,7 @@ fn blur_rows(
                 accumulate_column(row(m, x0, x1), &pairs, &ky[c..], &mut out[dy * w + x0..dy * w + x1]);
             }
         }
-        // Whole rows, so the subtrahend streams in order (a strip at a time
-        // it would be a new page every row).
-        if let Some(minus) = minus {
-            for dy in b0..b1 {
-                let rows = (&out[dy * w..(dy + 1) * w], minus.row(y0 + dy));
-                subtract(rows.0, rows.1, &mut diff[dy * w..(dy + 1) * w]);
-            }
-        }
     }
-}
-
-/// `d = b − a`, element by element (plain f32 subtraction).
-fn subtract(b: &[f32], a: &[f32], d: &mut [f32]) {
-    #[inline(always)]
-    fn body(b: &[f32], a: &[f32], d: &mut [f32]) {
-        for ((d, &b), &a) in d.iter_mut().zip(b).zip(a) {
-            *d = b - a;
-        }
-    }
-    #[cfg(target_arch = "x86_64")]
-    {
-        #[target_feature(enable = "avx2")]
-        unsafe fn avx2(b: &[f32], a: &[f32], d: &mut [f32]) {
-            body(b, a, d)
-        }
-        if std::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, the only feature `avx2` enables.
-            return unsafe { avx2(b, a, d) };
-        }
-    }
-    body(b, a, d)
 }
 
 /// Bytes of row-pass buffer per band (a share of a 2 MB L2).

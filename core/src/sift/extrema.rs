@@ -14,45 +14,102 @@ const DERIV_SCALE: f32 = IMG_SCALE * 0.5;
 const SECOND_DERIV_SCALE: f32 = IMG_SCALE;
 const CROSS_DERIV_SCALE: f32 = IMG_SCALE * 0.25;
 
-/// Finds the keypoints of one (octave, layer) DoG image, rows `[r0, r1)`,
-/// appending them with every orientation peak (unordered; §10 sorts).
-pub fn scan_layer(
-    gauss: &[Plane],
-    dog: &[Plane],
-    o: usize,
-    layer: usize,
-    rows: std::ops::Range<usize>,
-    p: &SiftParams,
-    out: &mut Vec<KeyPoint>,
-) {
+/// One DoG level, read through the two Gaussian levels it is the difference
+/// of: the value OpenCV stores in its DoG pyramid is this same f32
+/// subtraction, so every refinement step sees the same numbers.
+#[derive(Clone, Copy)]
+struct Dog<'a> {
+    hi: &'a Plane,
+    lo: &'a Plane,
+}
+
+impl Dog<'_> {
+    #[inline(always)]
+    fn at(&self, r: usize, c: usize) -> f32 {
+        self.hi.at(r, c) - self.lo.at(r, c)
+    }
+}
+
+/// DoG level `j` of an octave whose Gaussian levels are `levels`.
+#[inline(always)]
+fn dog(levels: &[Plane], j: usize) -> Dog<'_> {
+    Dog { hi: &levels[j + 1], lo: &levels[j] }
+}
+
+/// Finds the keypoints of octave `o`, rows `[r0, r1)` of its DoG layers
+/// 1..=nl, appending them with every orientation peak (unordered; §10
+/// sorts).
+///
+/// OpenCV scans one stored DoG image at a time. The DoG rows come instead
+/// from a rolling window of three rows per DoG level, each row the f32
+/// difference of two Gaussian rows taken once; the three layers' scans of
+/// a row then read it from cache. That moves each Gaussian level through
+/// memory once, instead of writing five DoG planes per octave and reading
+/// them back nine times (a third of SIFT's memory traffic on a KITTI frame).
+pub fn scan_octave(gauss: &[Plane], o: usize, rows: std::ops::Range<usize>, p: &SiftParams, out: &mut Vec<KeyPoint>) {
     let nl = p.n_octave_layers;
-    let idx = o * (nl + 2) + layer;
-    let (prev, cur, next) = (&dog[idx - 1], &dog[idx], &dog[idx + 1]);
-    let (w, h) = (cur.width, cur.height);
+    let levels = &gauss[o * (nl + 3)..(o + 1) * (nl + 3)];
+    let (w, h) = (levels[0].width, levels[0].height);
     // floor(0.5 * contrastThreshold / nOctaveLayers * 255 * SIFT_FIXPT_SCALE),
     // an int compared as float: 1 with the defaults.
     let threshold = (0.5 * p.contrast_threshold / nl as f64 * 255.0).floor() as i32 as f32;
     let r_start = rows.start.max(IMG_BORDER);
     let r_end = rows.end.min(h.saturating_sub(IMG_BORDER));
-    if w <= 2 * IMG_BORDER {
+    if w <= 2 * IMG_BORDER || r_start >= r_end {
         return;
     }
+    // Row y of DoG level j is window row 3j + y % 3.
+    let mut window = Plane::for_overwrite(w, 3 * (nl + 2));
+    let slot = |j: usize, y: usize| 3 * j + y % 3;
+    let fill = |window: &mut Plane, y: usize| {
+        for j in 0..nl + 2 {
+            difference(levels[j + 1].row(y), levels[j].row(y), window.row_mut(slot(j, y)));
+        }
+    };
+    fill(&mut window, r_start - 1);
+    fill(&mut window, r_start);
     let mut candidates = Vec::new();
     let mut scratch = ColumnExtremes::default();
     for r in r_start..r_end {
-        let rows = [
-            prev.row(r - 1), prev.row(r), prev.row(r + 1),
-            cur.row(r - 1), cur.row(r), cur.row(r + 1),
-            next.row(r - 1), next.row(r), next.row(r + 1),
-        ];
-        candidates.clear();
-        row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates, &mut scratch);
-        for &c in &candidates {
-            if let Some(refined) = adjust_local_extremum(dog, o, layer, r, c, p) {
-                push_oriented(gauss, refined, p, out);
+        fill(&mut window, r + 1);
+        for layer in 1..=nl {
+            let row = |j: usize, y: usize| window.row(slot(j, y));
+            let rows = [
+                row(layer - 1, r - 1), row(layer - 1, r), row(layer - 1, r + 1),
+                row(layer, r - 1), row(layer, r), row(layer, r + 1),
+                row(layer + 1, r - 1), row(layer + 1, r), row(layer + 1, r + 1),
+            ];
+            candidates.clear();
+            row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates, &mut scratch);
+            for &c in &candidates {
+                if let Some(refined) = adjust_local_extremum(levels, o, layer, r, c, p) {
+                    push_oriented(gauss, refined, p, out);
+                }
             }
         }
     }
+}
+
+/// `d = hi − lo`, element by element: one row of a DoG level.
+fn difference(hi: &[f32], lo: &[f32], d: &mut [f32]) {
+    #[inline(always)]
+    fn body(hi: &[f32], lo: &[f32], d: &mut [f32]) {
+        for ((d, &a), &b) in d.iter_mut().zip(hi).zip(lo) {
+            *d = a - b;
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx2(hi: &[f32], lo: &[f32], d: &mut [f32]) {
+            body(hi, lo, d)
+        }
+        if std::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, the only feature `avx2` enables.
+            return unsafe { avx2(hi, lo, d) };
+        }
+    }
+    body(hi, lo, d)
 }
 
 /// Pixels per block of the vectorised 26-neighbour test.
@@ -269,7 +326,7 @@ struct Derivs {
 }
 
 #[inline(always)]
-fn first_derivs(cur: &Plane, prev: &Plane, next: &Plane, r: usize, c: usize) -> [f32; 3] {
+fn first_derivs(cur: Dog, prev: Dog, next: Dog, r: usize, c: usize) -> [f32; 3] {
     [
         (cur.at(r, c + 1) - cur.at(r, c - 1)) * DERIV_SCALE,
         (cur.at(r + 1, c) - cur.at(r - 1, c)) * DERIV_SCALE,
@@ -278,7 +335,7 @@ fn first_derivs(cur: &Plane, prev: &Plane, next: &Plane, r: usize, c: usize) -> 
 }
 
 #[inline(always)]
-fn xy_second_derivs(cur: &Plane, r: usize, c: usize) -> (f32, f32, f32) {
+fn xy_second_derivs(cur: Dog, r: usize, c: usize) -> (f32, f32, f32) {
     let v2 = cur.at(r, c) * 2.0;
     let dxx = ((cur.at(r, c + 1) + cur.at(r, c - 1)) - v2) * SECOND_DERIV_SCALE;
     let dyy = ((cur.at(r + 1, c) + cur.at(r - 1, c)) - v2) * SECOND_DERIV_SCALE;
@@ -288,7 +345,7 @@ fn xy_second_derivs(cur: &Plane, r: usize, c: usize) -> (f32, f32, f32) {
     (dxx, dyy, dxy)
 }
 
-fn derivs(cur: &Plane, prev: &Plane, next: &Plane, r: usize, c: usize) -> Derivs {
+fn derivs(cur: Dog, prev: Dog, next: Dog, r: usize, c: usize) -> Derivs {
     let d = first_derivs(cur, prev, next, r, c);
     let (dxx, dyy, dxy) = xy_second_derivs(cur, r, c);
     let v2 = cur.at(r, c) * 2.0;
@@ -327,7 +384,7 @@ fn solve_offsets(g: &Derivs) -> (f32, f32, f32) {
 /// `adjustLocalExtrema`: up to five Newton steps, then the contrast and
 /// edge tests. `None` when OpenCV rejects the candidate.
 fn adjust_local_extremum(
-    dog: &[Plane],
+    levels: &[Plane],
     o: usize,
     layer0: usize,
     r0: usize,
@@ -335,15 +392,14 @@ fn adjust_local_extremum(
     p: &SiftParams,
 ) -> Option<Refined> {
     let nl = p.n_octave_layers;
-    let base = o * (nl + 2);
-    let (w, h) = (dog[base].width as i64, dog[base].height as i64);
+    let (w, h) = (levels[0].width as i64, levels[0].height as i64);
     let border = IMG_BORDER as i64;
     let (mut layer, mut r, mut c) = (layer0 as i64, r0 as i64, c0 as i64);
     let (mut xi, mut xr, mut xc) = (0f32, 0f32, 0f32);
     let mut converged = false;
     for _ in 0..MAX_INTERP_STEPS {
-        let li = base + layer as usize;
-        let g = derivs(&dog[li], &dog[li - 1], &dog[li + 1], r as usize, c as usize);
+        let li = layer as usize;
+        let g = derivs(dog(levels, li), dog(levels, li - 1), dog(levels, li + 1), r as usize, c as usize);
         (xc, xr, xi) = solve_offsets(&g);
         if xi.abs() < 0.5 && xr.abs() < 0.5 && xc.abs() < 0.5 {
             converged = true;
@@ -364,8 +420,7 @@ fn adjust_local_extremum(
         return None;
     }
     let (layer, r, c) = (layer as usize, r as usize, c as usize);
-    let li = base + layer;
-    let (cur, prev, next) = (&dog[li], &dog[li - 1], &dog[li + 1]);
+    let (cur, prev, next) = (dog(levels, layer), dog(levels, layer - 1), dog(levels, layer + 1));
 
     let [d0, d1, d2] = first_derivs(cur, prev, next, r, c);
     let t = fma(d2, xi, fma(d1, xr, d0 * xc));

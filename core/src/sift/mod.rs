@@ -115,32 +115,31 @@ pub fn host_opencv_lanes() -> usize {
 /// The Gaussian pyramid and octave count of one image.
 struct ScaleSpace {
     gauss: Vec<Plane>,
-    dog: Vec<Plane>,
     octaves: usize,
 }
 
 fn scale_space(img: &GrayImage, p: &SiftParams) -> ScaleSpace {
     let base = initial::initial_image(img, p.sigma);
     let octaves = pyramid::octave_count(base.width, base.height);
-    let (gauss, dog) = pyramid::pyramids(base, octaves, p.sigma, p.n_octave_layers);
-    ScaleSpace { gauss, dog, octaves }
+    let gauss = pyramid::gaussian_pyramid(base, octaves, p.sigma, p.n_octave_layers);
+    ScaleSpace { gauss, octaves }
 }
 
 fn find_keypoints(ss: &ScaleSpace, p: &SiftParams) -> Vec<KeyPoint> {
     let mut kps = Vec::new();
     let nl = p.n_octave_layers;
-    // Bands of rows, so the three big layers of the first octave spread over
-    // all threads; OpenCV splits its scan by rows the same way.
+    // Bands of rows, so the first octave spreads over all threads; OpenCV
+    // splits its scan by rows the same way.
     const BAND: usize = 32;
-    let jobs: Vec<(usize, usize, usize)> = (0..ss.octaves)
+    let jobs: Vec<(usize, usize)> = (0..ss.octaves)
         .flat_map(|o| {
-            let h = ss.dog[o * (nl + 2)].height;
-            (1..=nl).flat_map(move |l| (0..h).step_by(BAND).map(move |r0| (o, l, r0)))
+            let h = ss.gauss[o * (nl + 3)].height;
+            (0..h).step_by(BAND).map(move |r0| (o, r0))
         })
         .collect();
     run_parallel(
         &jobs,
-        |&(o, l, r0), out| extrema::scan_layer(&ss.gauss, &ss.dog, o, l, r0..r0 + BAND, p, out),
+        |&(o, r0), out| extrema::scan_octave(&ss.gauss, o, r0..r0 + BAND, p, out),
         &mut kps,
     );
     order::remove_duplicated_sorted(&mut kps);

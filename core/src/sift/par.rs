@@ -17,38 +17,25 @@ pub fn threads() -> usize {
 /// Fills `out` (split into contiguous chunks of `chunk_len` multiples of
 /// `unit` elements) by calling `f(first_unit_index, chunk)` on each chunk.
 pub fn for_each_chunk<T: Send>(out: &mut [T], unit: usize, f: impl Fn(usize, &mut [T]) + Sync) {
-    for_each_chunk_pair(out, &mut [], unit, |first, a, _| f(first, a));
-}
-
-/// [`for_each_chunk`] over two planes of the same shape at once, `f` getting
-/// the same rows of each; `second` may be empty (then its chunks are empty).
-pub fn for_each_chunk_pair<T: Send>(
-    out: &mut [T],
-    second: &mut [T],
-    unit: usize,
-    f: impl Fn(usize, &mut [T], &mut [T]) + Sync,
-) {
     let units = if unit == 0 { 0 } else { out.len() / unit };
     let n = threads().min(units.max(1));
     // Thread start-up costs more than small planes (the top octaves) take.
     if n <= 1 || units < 2 || std::mem::size_of_val(out) < 256 * 1024 {
-        f(0, out, second);
+        f(0, out);
         return;
     }
     let per = units.div_ceil(n);
     let chunk = per * unit;
-    let mut seconds = second.chunks_mut(chunk);
     #[cfg(not(target_arch = "wasm32"))]
     std::thread::scope(|s| {
         for (i, a) in out.chunks_mut(chunk).enumerate() {
-            let b = seconds.next().unwrap_or_default();
             let f = &f;
-            s.spawn(move || f(i * per, a, b));
+            s.spawn(move || f(i * per, a));
         }
     });
     #[cfg(target_arch = "wasm32")]
     for (i, a) in out.chunks_mut(chunk).enumerate() {
-        f(i * per, a, seconds.next().unwrap_or_default());
+        f(i * per, a);
     }
 }
 

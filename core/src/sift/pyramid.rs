@@ -1,6 +1,6 @@
 //! Gaussian and difference-of-Gaussians pyramids (spec §4, §5).
 
-use super::blur::gaussian_blur_and_difference;
+use super::blur::gaussian_blur;
 use super::image::Plane;
 use super::num::rne64;
 
@@ -27,16 +27,17 @@ pub fn level_sigmas(sigma: f64, layers: usize) -> Vec<f64> {
     sig
 }
 
-/// `layers + 3` Gaussian levels per octave, indexed `o * (layers + 3) + i`,
-/// and the `layers + 2` DoG levels, `o * (layers + 2) + i` = level i+1 − level i
-/// (plain f32 differences), each made by the blur that makes level i+1.
-pub fn pyramids(base: Plane, octaves: usize, sigma: f64, layers: usize) -> (Vec<Plane>, Vec<Plane>) {
+/// `layers + 3` Gaussian levels per octave, indexed `o * (layers + 3) + i`.
+/// OpenCV also stores the `layers + 2` DoG levels (level i+1 − level i);
+/// here the extrema scan takes those differences row by row as it goes
+/// ([`super::extrema::scan_octave`]), the same f32 subtractions, instead of
+/// writing five more planes per octave and reading them back three times.
+pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) -> Vec<Plane> {
     let sig = level_sigmas(sigma, layers);
     let per = layers + 3;
     let mut gauss: Vec<Plane> = Vec::with_capacity(octaves * per);
-    let mut dog: Vec<Plane> = Vec::with_capacity(octaves * (per - 1));
     if octaves == 0 {
-        return (gauss, dog);
+        return gauss;
     }
     gauss.push(base);
     for o in 0..octaves {
@@ -47,12 +48,11 @@ pub fn pyramids(base: Plane, octaves: usize, sigma: f64, layers: usize) -> (Vec<
             gauss.push(first);
         }
         for i in 1..per {
-            let (level, diff) = gaussian_blur_and_difference(&gauss[o * per + i - 1], sig[i]);
+            let level = gaussian_blur(&gauss[o * per + i - 1], sig[i]);
             gauss.push(level);
-            dog.push(diff);
         }
     }
-    (gauss, dog)
+    gauss
 }
 
 fn downsample(src: &Plane) -> Plane {
