@@ -2,7 +2,7 @@
 
 use std::sync::Mutex;
 
-/// A row-major f32 image: one Gaussian or DoG level.
+/// A row-major f32 image: one Gaussian level (or a scratch buffer).
 #[derive(Debug, PartialEq)]
 pub struct Plane {
     pub width: usize,
@@ -65,8 +65,9 @@ impl Clone for Plane {
 // cost a fifth of the run; the video loop and the app run SIFT frame after
 // frame (the video loop on a new thread each time), so a freed plane's
 // buffer is kept for the next one instead, in one process-wide set.
-// One KITTI frame frees 66 buffers of 4096 floats or more (octaves 0–5:
-// 6 Gaussian and 5 DoG levels each, 77 MB); keep a frame's worth.
+// One KITTI frame frees about 40 buffers of 4096 floats or more (octaves
+// 0–5: 6 Gaussian levels each, 45 MB, plus the upsampled base's and the
+// blurs' band buffers); keep a frame's worth with room to spare.
 const MAX_SPARE_BUFFERS: usize = 160;
 const MAX_SPARE_FLOATS: usize = 64 << 20; // 256 MB
 

@@ -4,8 +4,8 @@
 //!
 //! 1. [`initial`] — float, ×2 bilinear upsample, blur to σ = 1.6 (§2)
 //! 2. [`blur`] — the bit-exact Gaussian kernel and separable filter (§3)
-//! 3. [`pyramid`] — Gaussian and DoG pyramids (§4, §5)
-//! 4. [`extrema`] — 26-neighbour scan and sub-pixel refinement (§6, §7)
+//! 3. [`pyramid`] — the Gaussian pyramid (§4); DoG rows are taken in the scan (§5)
+//! 4. [`extrema`] — DoG rows, 26-neighbour scan and sub-pixel refinement (§5–§7)
 //! 5. [`orientation`] — 36-bin orientation histogram peaks (§8)
 //! 6. [`order`] — dedup, `retainBest` via libstdc++ introselect, rescale (§10)
 //! 7. [`descriptor`] — 4×4×8 histograms, clipped, scaled to 0..255 (§11)
