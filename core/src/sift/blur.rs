@@ -91,6 +91,12 @@ fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
             row_filter(src.row(reflect101(v, h)), kx, &mut padded, &mut buf[j * w..(j + 1) * w]);
         }
         let row = |m: usize, x0: usize, x1: usize| &buf[m * w + x0..m * w + x1];
+        // Whether the wasm column pass may take its fast path (see `wasm::tame`);
+        // checked once per band, not per strip, as it costs a pass over the rows.
+        #[cfg(target_arch = "wasm32")]
+        let tame = wasm::tame_kernel(&ky[c..]) && wasm::tame(&buf[..(b1 - b0 + 2 * c) * w]);
+        #[cfg(not(target_arch = "wasm32"))]
+        let tame = false;
         let mut pairs: Vec<(&[f32], &[f32])> = Vec::with_capacity(c);
         // Vertical strips narrow enough that the 2c+1 source rows of one
         // output row stay in L1 while the next row reuses 2c of them.
@@ -100,7 +106,7 @@ fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
                 let m = dy - b0 + c;
                 pairs.clear();
                 pairs.extend((1..=c).map(|k| (row(m + k, x0, x1), row(m - k, x0, x1))));
-                accumulate_column(row(m, x0, x1), &pairs, &ky[c..], &mut out[dy * w + x0..dy * w + x1]);
+                accumulate_column(row(m, x0, x1), &pairs, &ky[c..], &mut out[dy * w + x0..dy * w + x1], tame);
             }
         }
     }
@@ -283,6 +289,158 @@ mod wasm {
         unsafe { v128_store(d.as_mut_ptr().cast(), v) }
     }
 
+    // The fast path. `fma_emulated_x4` checks every sum for the two cases
+    // where rounding the f64 sum to f32 can differ from a fused multiply-add:
+    // a sum on an f32 halfway point, and an f32-subnormal magnitude. On tame
+    // data the second cannot occur: with every input 0 or in [2^-100, 2^100]
+    // and every weight in [2^-20, 1] (Gaussian weights are ≥ 1.8e-5), every
+    // product and every partial sum of these non-negative terms is 0 or at
+    // least 2^-120, and far below the f32 maximum. The accumulators then stay
+    // in f64 (each holding its f32-rounded value), the halfway test is ORed
+    // over the whole block, and a block where it fired (about one in a
+    // million sums) is recomputed with the scalar exact FMA. Half the
+    // operations of the per-FMA check, on the stage that is most of wasm SIFT.
+
+    const TAME_MIN: f32 = 7.888_609e-31; // 2^-100
+    const TAME_MAX: f32 = 1.267_650_6e30; // 2^100
+
+    /// Every value is 0 or in [2^-100, 2^100] (so none is negative, NaN or infinite).
+    pub fn tame(values: &[f32]) -> bool {
+        let (lo, hi, zero) = (f32x4_splat(TAME_MIN), f32x4_splat(TAME_MAX), f32x4_splat(0.0));
+        let mut ok = i32x4_splat(-1);
+        let mut chunks = values.chunks_exact(4);
+        for c in &mut chunks {
+            let v = load(c, 0);
+            ok = v128_and(ok, v128_or(f32x4_eq(v, zero), v128_and(f32x4_ge(v, lo), f32x4_le(v, hi))));
+        }
+        i32x4_all_true(ok) && chunks.remainder().iter().all(|&v| v == 0.0 || (TAME_MIN..=TAME_MAX).contains(&v))
+    }
+
+    /// Every weight is in [2^-20, 1].
+    pub fn tame_kernel(k: &[f32]) -> bool {
+        k.iter().all(|&v| (9.536_743e-7..=1.0).contains(&v))
+    }
+
+    /// f64 pairs per block: 16 pixels.
+    const P: usize = 8;
+
+    #[inline(always)]
+    fn round_to_f32(s: v128) -> v128 {
+        f64x2_promote_low_f32x4(f32x4_demote_f64x2_zero(s))
+    }
+
+    /// Lanes whose f64 value lies exactly on an f32 halfway point.
+    #[inline(always)]
+    fn halfway(s: v128) -> v128 {
+        i64x2_eq(v128_and(s, i64x2_splat(0x1FFF_FFFF)), i64x2_splat(0x1000_0000))
+    }
+
+    fn load_f64(s: &[f64], i: usize) -> v128 {
+        let s = &s[i..i + 2];
+        // SAFETY: `s` holds exactly two f64; v128_load needs no alignment.
+        unsafe { v128_load(s.as_ptr().cast()) }
+    }
+
+    /// Stores 16 f32-valued f64 accumulators as f32.
+    #[inline(always)]
+    fn store_block(dst: &mut [f32], x: usize, acc: &[v128; P]) {
+        for q in 0..P / 2 {
+            let v = i32x4_shuffle::<0, 1, 4, 5>(f32x4_demote_f64x2_zero(acc[2 * q]), f32x4_demote_f64x2_zero(acc[2 * q + 1]));
+            store(dst, x + 4 * q, v);
+        }
+    }
+
+    thread_local! {
+        static WIDE: core::cell::RefCell<Vec<f64>> = const { core::cell::RefCell::new(Vec::new()) };
+    }
+
+    /// [`row`] on tame data and a tame kernel.
+    pub fn row_tame(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
+        let w = dst.len();
+        let n = w + kx.len() - 1;
+        WIDE.with(|wide| {
+            let mut wide = wide.borrow_mut();
+            wide.clear();
+            wide.extend(padded[..n].iter().map(|&v| v as f64));
+            let mut x = 0;
+            while x + 2 * P <= w {
+                let k0 = f64x2_splat(kx[0] as f64);
+                let mut acc: [v128; P] = core::array::from_fn(|q| round_to_f32(f64x2_mul(load_f64(&wide, x + 2 * q), k0)));
+                let mut hard = i64x2_splat(0);
+                for (k, &kv) in kx.iter().enumerate().skip(1) {
+                    let kv = f64x2_splat(kv as f64);
+                    for (q, a) in acc.iter_mut().enumerate() {
+                        let s = f64x2_add(f64x2_mul(load_f64(&wide, x + k + 2 * q), kv), *a);
+                        hard = v128_or(hard, halfway(s));
+                        *a = round_to_f32(s);
+                    }
+                }
+                if v128_any_true(hard) {
+                    row_scalar(padded, kx, dst, x..x + 2 * P);
+                } else {
+                    store_block(dst, x, &acc);
+                }
+                x += 2 * P;
+            }
+            row_scalar(padded, kx, dst, x..w);
+        });
+    }
+
+    fn row_scalar(padded: &[f32], kx: &[f32], dst: &mut [f32], xs: core::ops::Range<usize>) {
+        for i in xs {
+            let mut a = padded[i] * kx[0];
+            for (k, &kv) in kx.iter().enumerate().skip(1) {
+                a = fma(padded[i + k], kv, a);
+            }
+            dst[i] = a;
+        }
+    }
+
+    /// [`column`] on tame rows and a tame kernel.
+    pub fn column_tame(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
+        let w = dst.len();
+        let high = |v: v128| i32x4_shuffle::<2, 3, 0, 1>(v, v);
+        let mut x = 0;
+        while x + 2 * P <= w {
+            let kc = f32x4_splat(ky[0]);
+            // The centre tap is an f32 product, as OpenCV's first multiply.
+            let mut acc: [v128; P] = core::array::from_fn(|q| {
+                let v = f32x4_mul(load(centre, x + 4 * (q / 2)), kc);
+                f64x2_promote_low_f32x4(if q % 2 == 0 { v } else { high(v) })
+            });
+            let mut hard = i64x2_splat(0);
+            for (k, (up, down)) in pairs.iter().enumerate() {
+                let kv = f64x2_splat(ky[k + 1] as f64);
+                for q in 0..P / 2 {
+                    let sum = f32x4_add(load(up, x + 4 * q), load(down, x + 4 * q));
+                    for (h, part) in [sum, high(sum)].into_iter().enumerate() {
+                        let a = &mut acc[2 * q + h];
+                        let s = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(part), kv), *a);
+                        hard = v128_or(hard, halfway(s));
+                        *a = round_to_f32(s);
+                    }
+                }
+            }
+            if v128_any_true(hard) {
+                column_scalar(centre, pairs, ky, dst, x..x + 2 * P);
+            } else {
+                store_block(dst, x, &acc);
+            }
+            x += 2 * P;
+        }
+        column_scalar(centre, pairs, ky, dst, x..w);
+    }
+
+    fn column_scalar(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32], xs: core::ops::Range<usize>) {
+        for i in xs {
+            let mut a = centre[i] * ky[0];
+            for (k, (up, down)) in pairs.iter().enumerate() {
+                a = fma(up[i] + down[i], ky[k + 1], a);
+            }
+            dst[i] = a;
+        }
+    }
+
     pub fn row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
         let w = dst.len();
         let mut x = 0;
@@ -347,12 +505,19 @@ fn accumulate_row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
         }
     }
     #[cfg(target_arch = "wasm32")]
-    return wasm::row(padded, kx, dst);
+    return if wasm::tame_kernel(kx) && wasm::tame(&padded[..dst.len() + kx.len() - 1]) {
+        wasm::row_tame(padded, kx, dst)
+    } else {
+        wasm::row(padded, kx, dst)
+    };
     #[allow(unreachable_code)]
     accumulate_row_generic::<BLOCK>(padded, kx, dst, super::num::fma)
 }
 
-fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
+/// `tame`: every value of the rows is tame (see `wasm::tame`), which lets
+/// the wasm column pass take its fast path; native passes ignore it.
+fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32], tame: bool) {
+    let _ = tame;
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY (both calls): the CPU supports the features the function was compiled for.
@@ -364,7 +529,7 @@ fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst
         }
     }
     #[cfg(target_arch = "wasm32")]
-    return wasm::column(centre, pairs, ky, dst);
+    return if tame { wasm::column_tame(centre, pairs, ky, dst) } else { wasm::column(centre, pairs, ky, dst) };
     #[allow(unreachable_code)]
     accumulate_column_generic(centre, pairs, ky, dst, super::num::fma)
 }
