@@ -271,7 +271,7 @@ mod x86 {
 /// WebAssembly: four pixels per vector with the lane-wise exact FMA
 /// emulation, four vectors per block; the rest of the row pixel by pixel.
 #[cfg(target_arch = "wasm32")]
-mod wasm {
+pub(crate) mod wasm {
     use super::super::num::{fma, fma_emulated_x4};
     use core::arch::wasm32::*;
 
@@ -532,6 +532,84 @@ fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst
     return if tame { wasm::column_tame(centre, pairs, ky, dst) } else { wasm::column(centre, pairs, ky, dst) };
     #[allow(unreachable_code)]
     accumulate_column_generic(centre, pairs, ky, dst, super::num::fma)
+}
+
+/// The wasm fast path's fallback, in the browser (`cargo test --target
+/// wasm32-unknown-unknown`): a block holding one sum that lands, rounded to
+/// f64, exactly on an f32 halfway point it does not lie on, so rounding that
+/// f64 to f32 goes the wrong way. Real images hit such a sum about once in a
+/// million FMAs, too rarely for a random test to be sure of one.
+#[cfg(all(test, target_arch = "wasm32"))]
+mod wasm_tests {
+    use super::super::num::fma_emulated;
+    use super::wasm;
+    use wasm_bindgen_test::*;
+
+    wasm_bindgen_test_configure!(run_in_browser);
+
+    /// A tap t in `taps` and a value p1 such that, with acc = k[t−1] (the sum
+    /// so far when the previous tap saw a 1 and all before it 0), acc + p1·k[t]
+    /// is a hard sum: its f64 rounding is the f32 halfway point above an odd
+    /// f32 `low` (so that tie goes up) and the exact value lies just below it,
+    /// so the FMA gives `low`. Returns (t, p1, low).
+    fn hard_sum(k: &[f32], taps: std::ops::Range<usize>) -> (usize, f32, f32) {
+        for t in taps {
+            let acc = k[t - 1];
+            for j in 0..1u32 << 20 {
+                let low = f32::from_bits(acc.to_bits() + j);
+                if low.to_bits() & 1 == 0 {
+                    continue;
+                }
+                let midpoint = (low as f64 + f32::from_bits(low.to_bits() + 1) as f64) / 2.0;
+                let target = midpoint - acc as f64;
+                let p1 = (target / k[t] as f64) as f32;
+                let product = p1 as f64 * k[t] as f64;
+                if acc as f64 + product == midpoint && product < target {
+                    assert_eq!(fma_emulated(p1, k[t], acc), low);
+                    assert_ne!(((acc as f64 + product) as f32).to_bits(), low.to_bits());
+                    return (t, p1, low);
+                }
+            }
+        }
+        panic!("no hard sum found");
+    }
+
+    #[wasm_bindgen_test]
+    fn a_block_with_a_hard_sum_is_redone_exactly() {
+        // The pyramid's second level; its kernel has hard sums in both halves.
+        let k = super::gaussian_kernel(1.5450077936447955);
+        let c = k.len() / 2;
+        assert!(wasm::tame_kernel(&k));
+        // Row pass: output pixel 3 of a 16-pixel block sees 1·k[t−1] + p1·k[t].
+        let (t, p1, want) = hard_sum(&k, 1..k.len());
+        let mut padded = vec![0f32; 16 + k.len() - 1];
+        padded[3 + t - 1] = 1.0;
+        padded[3 + t] = p1;
+        assert!(wasm::tame(&padded));
+        let (mut fast, mut exact) = (vec![0f32; 16], vec![0f32; 16]);
+        wasm::row_tame(&padded, &k, &mut fast);
+        for (i, e) in exact.iter_mut().enumerate() {
+            let mut a = padded[i] * k[0];
+            for (t, &kv) in k.iter().enumerate().skip(1) {
+                a = fma_emulated(padded[i + t], kv, a);
+            }
+            *e = a;
+        }
+        assert_eq!(fast[3], want);
+        assert_eq!(fast, exact);
+        // Column pass: pixel 5 sees the same two taps in the kernel's upper half
+        // (pair q of rows has weight k[c+1+q]; the centre row has k[c]).
+        let (t, p1, want) = hard_sum(&k, c + 1..k.len());
+        let zeros = vec![0f32; 16];
+        let mut rows = vec![vec![0f32; 16]; k.len() - c];
+        rows[t - 1 - c][5] = 1.0;
+        rows[t - c][5] = p1;
+        let pairs: Vec<(&[f32], &[f32])> = rows[1..].iter().map(|r| (&r[..], &zeros[..])).collect();
+        let mut fast = vec![0f32; 16];
+        wasm::column_tame(&rows[0], &pairs, &k[c..], &mut fast);
+        assert_eq!(fast[5], want);
+        assert!(fast.iter().enumerate().all(|(i, &v)| i == 5 || v == 0.0));
+    }
 }
 
 #[cfg(test)]
