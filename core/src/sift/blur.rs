@@ -457,13 +457,7 @@ pub(crate) mod wasm {
             }
             x += 4 * V;
         }
-        for i in x..w {
-            let mut a = padded[i] * kx[0];
-            for (k, &kv) in kx.iter().enumerate().skip(1) {
-                a = fma(padded[i + k], kv, a);
-            }
-            dst[i] = a;
-        }
+        row_scalar(padded, kx, dst, x..w);
     }
 
     pub fn column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
@@ -483,13 +477,7 @@ pub(crate) mod wasm {
             }
             x += 4 * V;
         }
-        for i in x..w {
-            let mut a = centre[i] * ky[0];
-            for (k, (up, down)) in pairs.iter().enumerate() {
-                a = fma(up[i] + down[i], ky[k + 1], a);
-            }
-            dst[i] = a;
-        }
+        column_scalar(centre, pairs, ky, dst, x..w);
     }
 }
 
