@@ -140,8 +140,8 @@ fn on_worker_message(index: usize, m: FromWorker) {
         FromWorker::Progress { id, stage } => with_progress(id, &stage),
         FromWorker::Done { id, result } => finish(id, Ok(result)),
         FromWorker::Failed { id, message } => finish(id, Err(message)),
-        // Odometry runs have their own worker (see `run_vo`).
-        FromWorker::VoStep { .. } | FromWorker::VoDone { .. } => {}
+        // Odometry runs have their own workers (see `run_vo`).
+        FromWorker::VoStep { .. } | FromWorker::VoDone { .. } | FromWorker::Detected { .. } => {}
     }
 }
 
@@ -276,16 +276,51 @@ pub fn sift(
     }
 }
 
-/// A visual-odometry run in its own worker (so the SIFT workers stay free);
-/// dropping or [`stop_vo`] terminates it.
+/// A visual-odometry run: a tracking worker that runs the lab's loop a frame
+/// at a time, and two detection helpers that find each frame's keypoints
+/// ahead of it, two frames at once (detection needs only the image, and is
+/// nine tenths of a frame's work in wasm). The page hands frames to the
+/// helpers as they free up and each detected frame to the tracker in order,
+/// so the results are those of the one-worker loop (and of the CLI), only
+/// sooner. Dropping it (a new run, or [`stop_vo`]) terminates the workers.
 struct VoRun {
+    tracker: Peer,
+    helpers: Vec<Peer>,
+    frames: Vec<Vec<u8>>,
+    /// Per frame: `None` until detected; `Some(None)` for frame 1, which never re-detects.
+    detected: Vec<Option<Option<Vec<[f32; 2]>>>>,
+    next_detect: usize,
+    next_track: usize,
+    tracking: bool,
+    over: bool,
+    on_event: std::rc::Rc<dyn Fn(FromWorker)>,
+}
+
+/// A worker and the messages waiting for it to be ready.
+struct Peer {
     worker: web_sys::Worker,
+    ready: bool,
+    queue: Vec<JsValue>,
+    busy: bool,
     _handlers: Vec<Closure<dyn FnMut(JsValue)>>,
+}
+
+impl Peer {
+    fn send(&mut self, m: JsValue) {
+        if self.ready {
+            let _ = self.worker.post_message(&m);
+        } else {
+            self.queue.push(m);
+        }
+    }
 }
 
 impl Drop for VoRun {
     fn drop(&mut self) {
-        self.worker.terminate();
+        self.tracker.worker.terminate();
+        for h in &self.helpers {
+            h.worker.terminate();
+        }
     }
 }
 
@@ -293,45 +328,150 @@ thread_local! {
     static VO_RUN: RefCell<Option<VoRun>> = const { RefCell::new(None) };
 }
 
+/// Which worker of the run a message came from.
+#[derive(Clone, Copy)]
+enum Role {
+    Tracker,
+    Helper(usize),
+}
+
+const VO_ID: u32 = 1;
+const VO_HELPERS: usize = 2;
+
 /// Starts the lab's odometry loop on `frames`; `on_event` gets every
 /// `VoStep`, then `VoDone` or `Failed`. A new run replaces the previous one.
 pub fn run_vo(frames: Vec<Vec<u8>>, poses: String, on_event: impl Fn(FromWorker) + 'static) -> Result<(), String> {
     stop_vo();
     let script = POOL.with(|p| p.borrow().script.clone());
-    let opts = web_sys::WorkerOptions::new();
-    opts.set_type(web_sys::WorkerType::Module);
-    let worker = web_sys::Worker::new_with_options(&script, &opts).map_err(|e| format!("cannot start the worker: {e:?}"))?;
-    let on_event = std::rc::Rc::new(on_event);
-    let request = RefCell::new(Some(ToWorker::Vo { id: 1, frames, poses }.to_js()));
-    let w = worker.clone();
-    let ev = on_event.clone();
-    let on_message = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
-        let data = e.unchecked_into::<web_sys::MessageEvent>().data();
-        match FromWorker::from_js(&data) {
-            Ok(FromWorker::Ready) => {
-                if let Some(m) = request.borrow_mut().take() {
-                    let _ = w.post_message(&m);
-                }
+    let spawn_peer = |role: Role| -> Result<Peer, String> {
+        let opts = web_sys::WorkerOptions::new();
+        opts.set_type(web_sys::WorkerType::Module);
+        let worker =
+            web_sys::Worker::new_with_options(&script, &opts).map_err(|e| format!("cannot start the worker: {e:?}"))?;
+        let on_message = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
+            let data = e.unchecked_into::<web_sys::MessageEvent>().data();
+            match FromWorker::from_js(&data) {
+                Ok(m) => on_vo_message(role, m),
+                Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
             }
-            Ok(m) => ev(m),
-            Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
-        }
-    });
-    let on_error = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
-        if let Some(e) = e.dyn_ref::<web_sys::ErrorEvent>() {
-            e.prevent_default();
-        }
-        on_event(FromWorker::Failed { id: 1, message: "the odometry worker failed (it could not start, or ran out of memory)".into() });
-    });
-    worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
-    worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
-    VO_RUN.with(|r| *r.borrow_mut() = Some(VoRun { worker, _handlers: vec![on_message, on_error] }));
+        });
+        let on_error = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
+            if let Some(e) = e.dyn_ref::<web_sys::ErrorEvent>() {
+                e.prevent_default();
+            }
+            let message = "the odometry worker failed (it could not start, or ran out of memory)";
+            on_vo_message(role, FromWorker::Failed { id: VO_ID, message: message.into() });
+        });
+        worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+        worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
+        Ok(Peer { worker, ready: false, queue: Vec::new(), busy: false, _handlers: vec![on_message, on_error] })
+    };
+    let mut tracker = spawn_peer(Role::Tracker)?;
+    let helpers = (0..VO_HELPERS).map(|i| spawn_peer(Role::Helper(i))).collect::<Result<Vec<_>, _>>()?;
+    tracker.send(ToWorker::VoStart { id: VO_ID, total: frames.len() as u32, poses }.to_js());
+    let mut detected = vec![None; frames.len()];
+    if let Some(d) = detected.get_mut(1) {
+        *d = Some(None);
+    }
+    let mut run = VoRun {
+        tracker,
+        helpers,
+        frames,
+        detected,
+        next_detect: 0,
+        next_track: 0,
+        tracking: false,
+        over: false,
+        on_event: std::rc::Rc::new(on_event),
+    };
+    run.feed();
+    VO_RUN.with(|r| *r.borrow_mut() = Some(run));
     Ok(())
 }
 
-/// Stops a running odometry (its worker is terminated).
+impl VoRun {
+    /// Gives every idle helper the next frame to detect, and the tracker the
+    /// next frame once its keypoints are in.
+    fn feed(&mut self) {
+        if self.over {
+            return;
+        }
+        for h in 0..self.helpers.len() {
+            while self.next_detect < self.frames.len() && self.detected[self.next_detect].is_some() {
+                self.next_detect += 1;
+            }
+            if self.helpers[h].busy || self.next_detect >= self.frames.len() {
+                continue;
+            }
+            let i = self.next_detect;
+            self.next_detect += 1;
+            self.helpers[h].busy = true;
+            self.helpers[h].send(ToWorker::Detect { frame: i as u32, bytes: self.frames[i].clone() }.to_js());
+        }
+        if self.tracking || self.next_track >= self.frames.len() {
+            return;
+        }
+        let i = self.next_track;
+        let Some(points) = self.detected[i].take() else { return };
+        self.next_track += 1;
+        self.tracking = true;
+        self.tracker.send(ToWorker::VoFrame { id: VO_ID, frame: i as u32, bytes: self.frames[i].clone(), points }.to_js());
+    }
+}
+
+fn on_vo_message(role: Role, m: FromWorker) {
+    // Update the run, then call the page's handler outside the borrow (it may
+    // start a new run or stop this one).
+    let forward = VO_RUN.with(|r| {
+        let mut r = r.borrow_mut();
+        let run = r.as_mut()?;
+        if let FromWorker::Ready = m {
+            let peer = match role {
+                Role::Tracker => &mut run.tracker,
+                Role::Helper(h) => &mut run.helpers[h],
+            };
+            peer.ready = true;
+            for q in std::mem::take(&mut peer.queue) {
+                let _ = peer.worker.post_message(&q);
+            }
+            return None;
+        }
+        if run.over {
+            return None;
+        }
+        let forward = match (&role, &m) {
+            (Role::Helper(h), FromWorker::Detected { frame, points }) => {
+                run.helpers[*h].busy = false;
+                if let Some(d) = run.detected.get_mut(*frame as usize) {
+                    *d = Some(Some(points.clone()));
+                }
+                None
+            }
+            (Role::Tracker, FromWorker::VoStep { .. }) => {
+                run.tracking = false;
+                Some(m)
+            }
+            (_, FromWorker::VoDone { .. }) => {
+                run.over = true;
+                Some(m)
+            }
+            (_, FromWorker::Failed { message, .. }) => {
+                run.over = true;
+                Some(FromWorker::Failed { id: VO_ID, message: message.clone() })
+            }
+            _ => None,
+        };
+        run.feed();
+        forward.map(|m| (run.on_event.clone(), m))
+    });
+    if let Some((on_event, m)) = forward {
+        on_event(m);
+    }
+}
+
+/// Stops a running odometry (its workers are terminated).
 pub fn stop_vo() {
-    // Take it out first: dropping terminates the worker, outside the borrow.
+    // Take it out first: dropping terminates the workers, outside the borrow.
     let old = VO_RUN.with(|r| r.borrow_mut().take());
     drop(old);
 }

@@ -19,6 +19,15 @@ pub enum ToWorker {
     /// Run the lab's visual odometry over `frames` (frame 0 first) with the
     /// ground-truth poses (`poses/00.txt` text) for the scale.
     Vo { id: u32, frames: Vec<Vec<u8>>, poses: String },
+    /// The lab's keypoint detection alone (`SIFT.detect` positions, in order) on
+    /// frame `frame` of an odometry run: detection helpers run it ahead of the
+    /// tracking worker, two frames at a time.
+    Detect { frame: u32, bytes: Vec<u8> },
+    /// Starts an odometry run of `total` frames fed one [`ToWorker::VoFrame`] at a time.
+    VoStart { id: u32, total: u32, poses: String },
+    /// The run's next frame, with its keypoints if a helper already detected
+    /// them (`None` for frame 1, which never re-detects).
+    VoFrame { id: u32, frame: u32, bytes: Vec<u8>, points: Option<Vec<[f32; 2]>> },
 }
 
 /// What SIFT produced for one frame, plus the gray image it ran on.
@@ -47,6 +56,8 @@ pub enum FromWorker {
     /// The run is over: trajectory error (RMSE, GT scale, no alignment) and
     /// the lab's trajectory window as PNG (the core's renderer, as the CLI writes it).
     VoDone { id: u32, ate: f64, png: Vec<u8>, ms: f64 },
+    /// The keypoint positions of a [`ToWorker::Detect`] frame.
+    Detected { frame: u32, points: Vec<[f32; 2]> },
 }
 
 fn set(o: &Object, k: &str, v: &JsValue) {
@@ -90,6 +101,23 @@ fn vec3(v: &[f64; 3]) -> JsValue {
     js_sys::Float64Array::from(v.as_slice()).into()
 }
 
+fn points_js(points: &[[f32; 2]]) -> JsValue {
+    let flat: Vec<f32> = points.iter().flatten().copied().collect();
+    Float32Array::from(flat.as_slice()).into()
+}
+
+fn get_points(o: &JsValue, k: &str) -> Result<Option<Vec<[f32; 2]>>, String> {
+    let v = get(o, k)?;
+    if v.is_null() || v.is_undefined() {
+        return Ok(None);
+    }
+    let flat = v.dyn_into::<Float32Array>().map_err(|_| format!("message field {k} is not a Float32Array"))?.to_vec();
+    if flat.len() % 2 != 0 {
+        return Err(format!("message field {k} has an odd number of coordinates"));
+    }
+    Ok(Some(flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect()))
+}
+
 fn kind(o: &JsValue) -> Result<String, String> {
     get_str(o, "type")
 }
@@ -114,6 +142,24 @@ impl ToWorker {
                 set(&o, "frames", &arr);
                 set(&o, "poses", &poses.as_str().into());
             }
+            ToWorker::Detect { frame, bytes } => {
+                set(&o, "type", &"detect".into());
+                set(&o, "frame", &(*frame).into());
+                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
+            }
+            ToWorker::VoStart { id, total, poses } => {
+                set(&o, "type", &"voStart".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "total", &(*total).into());
+                set(&o, "poses", &poses.as_str().into());
+            }
+            ToWorker::VoFrame { id, frame, bytes, points } => {
+                set(&o, "type", &"voFrame".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "frame", &(*frame).into());
+                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
+                set(&o, "points", &points.as_deref().map(points_js).unwrap_or(JsValue::NULL));
+            }
         }
         o.into()
     }
@@ -134,6 +180,14 @@ impl ToWorker {
                     .collect::<Result<Vec<_>, _>>()?;
                 Ok(ToWorker::Vo { id: get_u32(v, "id")?, frames, poses: get_str(v, "poses")? })
             }
+            "detect" => Ok(ToWorker::Detect { frame: get_u32(v, "frame")?, bytes: get_bytes(v, "bytes")? }),
+            "voStart" => Ok(ToWorker::VoStart { id: get_u32(v, "id")?, total: get_u32(v, "total")?, poses: get_str(v, "poses")? }),
+            "voFrame" => Ok(ToWorker::VoFrame {
+                id: get_u32(v, "id")?,
+                frame: get_u32(v, "frame")?,
+                bytes: get_bytes(v, "bytes")?,
+                points: get_points(v, "points")?,
+            }),
             other => Err(format!("unknown message type {other:?}")),
         }
     }
@@ -173,6 +227,11 @@ impl FromWorker {
                 set(&o, "ate", &(*ate).into());
                 set(&o, "png", &Uint8Array::from(png.as_slice()).into());
                 set(&o, "ms", &(*ms).into());
+            }
+            FromWorker::Detected { frame, points } => {
+                set(&o, "type", &"detected".into());
+                set(&o, "frame", &(*frame).into());
+                set(&o, "points", &points_js(points));
             }
             FromWorker::Done { id, result } => {
                 set(&o, "type", &"done".into());
@@ -217,6 +276,10 @@ impl FromWorker {
                 ate: get_f64(v, "ate")?,
                 png: get_bytes(v, "png")?,
                 ms: get_f64(v, "ms")?,
+            }),
+            "detected" => Ok(FromWorker::Detected {
+                frame: get_u32(v, "frame")?,
+                points: get_points(v, "points")?.ok_or("detected without points")?,
             }),
             "done" => {
                 let width = get_u32(v, "width")? as usize;

@@ -3,6 +3,7 @@
 
 use crate::msg::{FromWorker, SiftResult, ToWorker};
 use siftlab_core::sift::{detect_and_compute, SiftParams};
+use siftlab_core::vo::odometry::sift_detector;
 use siftlab_core::GrayImage;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -54,48 +55,116 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
                 post(FromWorker::Failed { id, message });
             }
         }
+        ToWorker::Detect { frame, bytes } => match GrayImage::decode(&bytes) {
+            Ok(img) => {
+                let points = sift_detector(SiftParams::for_host())(&img);
+                post(FromWorker::Detected { frame, points });
+            }
+            Err(e) => post(FromWorker::Failed { id: frame, message: format!("frame {frame}: {e}") }),
+        },
+        ToWorker::VoStart { id, total, poses } => {
+            let started = VoSession::start(id, total as usize, &poses);
+            let failed = started.as_ref().err().cloned();
+            SESSION.with(|s| *s.borrow_mut() = started.ok());
+            if let Some(message) = failed {
+                post(FromWorker::Failed { id, message });
+            }
+        }
+        ToWorker::VoFrame { id, frame, bytes, points } => {
+            let r = SESSION.with(|s| match s.borrow_mut().as_mut() {
+                Some(session) if session.id == id => session.frame(frame as usize, &bytes, points, post),
+                _ => Err("no odometry run is going on (it was stopped or failed)".into()),
+            });
+            if let Err(message) = r {
+                SESSION.with(|s| *s.borrow_mut() = None);
+                post(FromWorker::Failed { id, message });
+            }
+        }
     }
 }
 
-/// The lab's `view_trajectory` loop, one message per frame so the page can
-/// draw the trajectory as it grows.
-fn odometry(id: u32, frames: &[Vec<u8>], poses: &str, post: &dyn Fn(FromWorker)) -> Result<(), String> {
-    use siftlab_core::dataset::{parse_poses, position};
-    use siftlab_core::render::{encode_png, trajectory};
-    use siftlab_core::vo::{metrics::ate_rmse, odometry::Odometry, Camera};
-    let t0 = now_ms();
-    let poses = parse_poses(poses).map_err(|e| format!("poses/00.txt: {e}"))?;
-    if poses.len() < frames.len() {
-        return Err(format!(
-            "poses/00.txt has {} poses but {} frames were asked for: the lab takes the scale from the ground truth of every frame",
-            poses.len(),
-            frames.len()
-        ));
+thread_local! {
+    /// The odometry run this worker tracks for, between `VoFrame` messages.
+    static SESSION: std::cell::RefCell<Option<VoSession>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The lab's `view_trajectory` loop, a frame at a time: the odometry state,
+/// the ground truth and the positions so far.
+struct VoSession {
+    id: u32,
+    total: usize,
+    poses: Vec<siftlab_core::dataset::PoseRow>,
+    odo: siftlab_core::vo::odometry::Odometry,
+    est: Vec<[f64; 3]>,
+    truth: Vec<[f64; 3]>,
+    t0: f64,
+}
+
+impl VoSession {
+    /// Checks the poses before any frame is read, as the CLI does.
+    fn start(id: u32, total: usize, poses: &str) -> Result<Self, String> {
+        use siftlab_core::dataset::parse_poses;
+        use siftlab_core::vo::{odometry::Odometry, Camera};
+        let t0 = now_ms();
+        let poses = parse_poses(poses).map_err(|e| format!("poses/00.txt: {e}"))?;
+        if poses.len() < total {
+            return Err(format!(
+                "poses/00.txt has {} poses but {} frames were asked for: the lab takes the scale from the ground truth of every frame",
+                poses.len(),
+                total
+            ));
+        }
+        let odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
+        Ok(VoSession { id, total, poses, odo, est: Vec::new(), truth: Vec::new(), t0 })
     }
-    let mut odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
-    let (mut est, mut truth) = (Vec::new(), Vec::new());
-    let total = frames.len() as u32;
-    for (i, bytes) in frames.iter().enumerate() {
+
+    /// Frame `i` (the next one): one step, posted; after the last, the
+    /// trajectory error and the lab's window as PNG. `points`: the frame's
+    /// keypoints if detected elsewhere (else detected here when the loop
+    /// re-detects).
+    fn frame(&mut self, i: usize, bytes: &[u8], points: Option<Vec<[f32; 2]>>, post: &dyn Fn(FromWorker)) -> Result<(), String> {
+        use siftlab_core::dataset::position;
+        use siftlab_core::render::{encode_png, trajectory};
+        use siftlab_core::vo::metrics::ate_rmse;
+        if i != self.est.len() || i >= self.total {
+            return Err(format!("frame {i} arrived out of order (expected frame {})", self.est.len()));
+        }
         let img = GrayImage::decode(bytes).map_err(|e| format!("frame {i}: {e}"))?;
-        let step = odo.step(&img, poses.get(i)).map_err(|e| e.to_string())?;
-        let gt = step.gt_position.or_else(|| poses.get(i).map(position));
-        est.push(step.position);
+        let step = self.odo.step_detected(&img, self.poses.get(i), points).map_err(|e| e.to_string())?;
+        let gt = step.gt_position.or_else(|| self.poses.get(i).map(position));
+        self.est.push(step.position);
         if let Some(g) = gt {
-            truth.push(g);
+            self.truth.push(g);
         }
         post(FromWorker::VoStep {
-            id,
+            id: self.id,
             frame: i as u32,
-            total,
+            total: self.total as u32,
             position: step.position,
             truth: gt,
             tracked: step.tracked as u32,
             redetected: step.redetected,
         });
+        if i + 1 == self.total {
+            let ate = ate_rmse(&self.est, &self.truth).map_err(|e| e.to_string())?;
+            let style = trajectory::Style::default();
+            let png = encode_png(&trajectory::draw(&self.truth, &self.est, &style)).map_err(|e| e.to_string())?;
+            post(FromWorker::VoDone { id: self.id, ate, png, ms: now_ms() - self.t0 });
+        }
+        Ok(())
     }
-    let ate = ate_rmse(&est, &truth).map_err(|e| e.to_string())?;
-    let png = encode_png(&trajectory::draw(&truth, &est, &trajectory::Style::default())).map_err(|e| e.to_string())?;
-    post(FromWorker::VoDone { id, ate, png, ms: now_ms() - t0 });
+}
+
+/// The lab's `view_trajectory` loop in this worker alone, one message per
+/// frame so the page can draw the trajectory as it grows.
+fn odometry(id: u32, frames: &[Vec<u8>], poses: &str, post: &dyn Fn(FromWorker)) -> Result<(), String> {
+    if frames.is_empty() {
+        return Err("no frames to run the odometry on: give at least 2".into());
+    }
+    let mut session = VoSession::start(id, frames.len(), poses)?;
+    for (i, bytes) in frames.iter().enumerate() {
+        session.frame(i, bytes, None, post)?;
+    }
     Ok(())
 }
 

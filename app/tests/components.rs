@@ -366,3 +366,67 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
     let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.starts_with("frame 0: not an image"), "{message}");
 }
+
+/// The app's odometry as `run_vo` drives it (a tracking worker fed one frame at a
+/// time with keypoints detected ahead by helper workers) gives exactly what the
+/// one-worker loop gives: every step's positions and counts, the trajectory error
+/// and the PNG. Both are run here through the worker's message handler, on four of
+/// the fixture frames; the e2e test compares the page with the CLI.
+#[wasm_bindgen_test]
+fn streamed_odometry_equals_the_one_worker_loop() {
+    let frames: Vec<Vec<u8>> = (0..4)
+        .map(|i| match i {
+            0 => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000000.png").to_vec(),
+            1 => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000001.png").to_vec(),
+            2 => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000002.png").to_vec(),
+            _ => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000003.png").to_vec(),
+        })
+        .collect();
+    let poses = include_str!("../../tests/fixtures/mykitti/poses/00.txt");
+    let handle = |m: ToWorker| {
+        let got = std::cell::RefCell::new(Vec::new());
+        siftlab_app::worker::handle(m, &|m| got.borrow_mut().push(m));
+        got.into_inner()
+    };
+    let without_time = |m: FromWorker| match m {
+        FromWorker::VoDone { id, ate, png, .. } => FromWorker::VoDone { id, ate, png, ms: 0.0 },
+        m => m,
+    };
+    let one_worker: Vec<FromWorker> =
+        handle(ToWorker::Vo { id: 7, frames: frames.clone(), poses: poses.into() }).into_iter().map(without_time).collect();
+    assert_eq!(one_worker.len(), 5, "{one_worker:?}");
+    assert!(matches!(one_worker[4], FromWorker::VoDone { .. }));
+
+    assert!(handle(ToWorker::VoStart { id: 7, total: 4, poses: poses.into() }).is_empty());
+    let mut streamed = Vec::new();
+    for (i, bytes) in frames.iter().enumerate() {
+        let points = (i != 1).then(|| {
+            let msg = ToWorker::Detect { frame: i as u32, bytes: bytes.clone() };
+            assert_eq!(ToWorker::from_js(&msg.to_js()).unwrap(), msg);
+            let got = handle(msg);
+            let [FromWorker::Detected { frame, points }] = got.as_slice() else { panic!("{got:?}") };
+            assert_eq!(*frame, i as u32);
+            assert!(points.len() >= 1400, "frame {i}: {} keypoints", points.len());
+            let back = FromWorker::from_js(&got[0].to_js()).unwrap();
+            assert_eq!(back, got[0]);
+            points.clone()
+        });
+        let msg = ToWorker::VoFrame { id: 7, frame: i as u32, bytes: bytes.clone(), points };
+        assert_eq!(ToWorker::from_js(&msg.to_js()).unwrap(), msg);
+        streamed.extend(handle(msg).into_iter().map(without_time));
+    }
+    assert_eq!(streamed, one_worker);
+
+    // A frame out of turn ends the run with a message, and later frames are refused.
+    assert!(handle(ToWorker::VoStart { id: 8, total: 4, poses: poses.into() }).is_empty());
+    let got = handle(ToWorker::VoFrame { id: 8, frame: 2, bytes: frames[2].clone(), points: None });
+    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(message.contains("out of order"), "{message}");
+    let got = handle(ToWorker::VoFrame { id: 8, frame: 0, bytes: frames[0].clone(), points: None });
+    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(message.contains("no odometry run"), "{message}");
+    // A helper given a broken frame names it.
+    let got = handle(ToWorker::Detect { frame: 3, bytes: b"nope".to_vec() });
+    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(message.starts_with("frame 3: not an image"), "{message}");
+}

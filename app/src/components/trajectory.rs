@@ -1,5 +1,5 @@
 //! The lab's `view_trajectory`: monocular visual odometry over frames 0…N−1 of
-//! the demo or a MyKITTI folder, computed by the core in a worker, drawn as it
+//! the demo or a MyKITTI folder, computed by the core in workers, drawn as it
 //! grows (truth green, estimate red, as in the lab's window), with the
 //! trajectory error and the lab's window as a PNG to download.
 
