@@ -327,9 +327,6 @@ impl Complex {
             (-self.re * o.im + self.im * o.re) * t,
         )
     }
-    fn abs(self) -> f64 {
-        self.re.hypot(self.im)
-    }
 }
 
 /// `cv::solvePoly` (§3.7): Durand–Kerner with in-place updates. `c[k]` is the
@@ -353,7 +350,10 @@ pub fn solve_poly(c: &[f64], max_iters: usize) -> Vec<Complex> {
         p = p.mul(r);
     }
     for _ in 0..max_iters {
-        let mut max_diff = 0.0f64;
+        // OpenCV keeps maxDiff = max(maxDiff, |Δ|) and stops when it is 0; only
+        // "is it still 0" matters, so the hypot is replaced by the exact test
+        // of when it is positive (see `moved`).
+        let mut changed = false;
         for i in 0..n {
             let p = roots[i];
             let mut num = coeffs[n];
@@ -370,9 +370,9 @@ pub fn solve_poly(c: &[f64], max_iters: usize) -> Vec<Complex> {
             }
             let delta = num.div(den);
             roots[i] = p.sub(delta);
-            max_diff = max_diff.max(delta.abs());
+            changed |= moved(delta);
         }
-        if max_diff <= 0.0 {
+        if !changed {
             break;
         }
     }
@@ -385,9 +385,29 @@ pub fn solve_poly(c: &[f64], max_iters: usize) -> Vec<Complex> {
     roots
 }
 
+/// Whether `std::max(maxDiff, hypot(Δ))` makes a zero maxDiff positive:
+/// hypot is +inf when a part is infinite (even with a NaN beside it), NaN
+/// when a part is NaN otherwise (and max keeps the 0 then), and positive
+/// for any finite Δ ≠ 0 (it does not underflow).
+#[inline]
+fn moved(d: Complex) -> bool {
+    d.re.is_infinite() || d.im.is_infinite() || (!d.re.is_nan() && !d.im.is_nan() && (d.re != 0.0 || d.im != 0.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn moved_is_hypot_making_max_positive() {
+        let v = [0.0, -0.0, 5e-324, -1e-300, 1.0, f64::INFINITY, f64::NEG_INFINITY, f64::NAN];
+        for &re in &v {
+            for &im in &v {
+                let d = Complex::new(re, im);
+                assert_eq!(moved(d), 0.0f64.max(re.hypot(im)) > 0.0, "{re} {im}");
+            }
+        }
+    }
 
     #[test]
     fn rng_follows_the_mwc_recurrence() {
