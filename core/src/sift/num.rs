@@ -194,18 +194,23 @@ macro_rules! with_hw_fma {
 /// so the loops vectorise (inlined into the FMA-enabled callers).
 #[inline(always)]
 pub fn gradient_samples(dxs: &[f32], dys: &[f32], w_args: &[f32]) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+    let (oris, mags) = gradient_directions(dxs, dys);
+    let wts = w_args.iter().map(|&a| exp32f(a)).collect();
+    (oris, mags, wts)
+}
+
+/// The orientation (degrees) and magnitude of every gradient sample.
+#[inline(always)]
+pub fn gradient_directions(dxs: &[f32], dys: &[f32]) -> (Vec<f32>, Vec<f32>) {
     let len = dxs.len();
-    let (mut oris, mut mags, mut wts) = (vec![0f32; len], vec![0f32; len], vec![0f32; len]);
+    let (mut oris, mut mags) = (vec![0f32; len], vec![0f32; len]);
     for k in 0..len {
         oris[k] = fast_atan2_deg(dys[k], dxs[k]);
     }
     for k in 0..len {
         mags[k] = magnitude(dxs[k], dys[k]);
     }
-    for k in 0..len {
-        wts[k] = exp32f(w_args[k]);
-    }
-    (oris, mags, wts)
+    (oris, mags)
 }
 
 // fastAtan2 coefficients: the f32 product of each coefficient and (f32)(180/pi).

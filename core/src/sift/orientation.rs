@@ -4,7 +4,7 @@
 
 use super::extrema::Refined;
 use super::image::Plane;
-use super::num::{fma, gradient_samples, rne, FLT_EPSILON};
+use super::num::{exp32f, fma, gradient_directions, rne, FLT_EPSILON};
 use super::{KeyPoint, SiftParams};
 
 const ORI_HIST_BINS: usize = 36;
@@ -54,6 +54,17 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
     let mut dys = Vec::with_capacity(cap);
     let mut ws = Vec::with_capacity(cap);
     prefetch_window(img, r, c, radius as usize + 1);
+    // The Gaussian weight exp((i² + j²)·scale) of each distinct i² + j² once:
+    // the same f32 argument gives the same weight, and a window has about a
+    // sixth as many distinct distances as samples.
+    let rr = radius.max(0) as usize;
+    let mut weight_of = vec![0f32; 2 * rr * rr + 1];
+    for i in 0..=rr {
+        for j in i..=rr {
+            let d2 = i * i + j * j;
+            weight_of[d2] = exp32f((d2 as i32) as f32 * expf_scale);
+        }
+    }
     for i in -radius..=radius {
         let y = r as i64 + i as i64;
         if y <= 0 || y >= rows - 1 {
@@ -71,13 +82,14 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
         dxs.extend(row[x0 + 1..x1 + 1].iter().zip(&row[x0 - 1..x1 - 1]).map(|(&a, &b)| a - b));
         dys.extend(up[x0..x1].iter().zip(&down[x0..x1]).map(|(&a, &b)| a - b));
         let ii = i * i;
-        ws.extend((j0 as i32..=j1 as i32).map(|j| (ii + j * j) as f32 * expf_scale));
+        ws.extend((j0 as i32..=j1 as i32).map(|j| weight_of[(ii + j * j) as usize]));
     }
     let len = dxs.len();
     let simd_len = len - len % lanes;
     let mut t = [0f32; 36 + 4];
     // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
-    let (oris, mags, wts) = gradient_samples(&dxs, &dys, &ws);
+    let (oris, mags) = gradient_directions(&dxs, &dys);
+    let wts = &ws;
     for k in 0..len {
         let (wt, ori, mag) = (wts[k], oris[k], mags[k]);
         let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
