@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """siftlab's visual odometry against the lab's OpenCV 4.8 pipeline, in the same run.
 
-    python3 tests/scripts/compare_vo.py [--dataset DIR] [--frames N] [--repeat K] [--json]
+    python3 tests/scripts/compare_vo.py [--dataset DIR] [--frames N] [--repeat K] [--baseline BIN] [--json]
 
 Runs tests/scripts/vo_reference.py's loop (in this process) and
 `target/release/siftlab -d DIR view_trajectory N --save-poses ...` (a subprocess; build it first
@@ -11,6 +11,8 @@ alignment, GT scale as the lab uses it), the frame-by-frame distance between the
 (max / median / at the last frame), and frames per second (best of K, whole loop with image
 reading; ours includes process start-up) with the ratio ours / OpenCV, plus the ratio of each
 back-to-back round and their median (the figure to quote on a machine whose speed drifts).
+With --baseline (an older siftlab build) that binary runs in every round too, and the
+per-round speed-up of --binary over it is reported (and whether both estimates are equal).
 
 The dataset defaults to ../shared/data/MyKITTI when it exists, else target/synthkitti
 (generate it with tests/scripts/gen_synthkitti.py --out target/synthkitti).
@@ -67,6 +69,8 @@ def main():
     ap.add_argument("--frames", type=int, default=None, help="frames from 0 (default: all)")
     ap.add_argument("--repeat", type=int, default=1, help="alternate both pipelines K times, keep the best time")
     ap.add_argument("--binary", default=os.path.join(REPO, "target", "release", "siftlab"))
+    ap.add_argument("--baseline", default=None,
+                    help="another siftlab binary (an older build) run in the same rounds, for the speed-up of a change")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
@@ -77,14 +81,19 @@ def main():
         raise SystemExit("need 2..%d frames, got %d (dataset %s)" % (available, frames, dataset))
     if not os.path.isfile(args.binary):
         raise SystemExit("%s not found: run `cargo build --release --bin siftlab` first" % args.binary)
+    if args.baseline and not os.path.isfile(args.baseline):
+        raise SystemExit("--baseline %s not found" % args.baseline)
 
     gt = [ref.gt_position(p) for p in ref.read_poses(dataset)[:frames]]
-    t_cv, t_ours = [], []
+    t_cv, t_ours, t_base = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(max(1, args.repeat)):
             start = time.perf_counter()
             cv_pos, _rot, _ = ref.run(dataset, frames)
             t_cv.append(time.perf_counter() - start)
+            if args.baseline:
+                base_pos, elapsed, _ = run_ours(args.baseline, dataset, frames, tmp)
+                t_base.append(elapsed)
             our_pos, elapsed, our_text = run_ours(args.binary, dataset, frames, tmp)
             t_ours.append(elapsed)
 
@@ -111,6 +120,12 @@ def main():
     # back-to-back round is the figure to trust, not ratios of bests.
     res["round_ratios"] = [c / o for c, o in zip(t_cv, t_ours)]
     res["median_round_ratio"] = statistics.median(res["round_ratios"])
+    if t_base:
+        res["baseline_round_ratios"] = [c / b for c, b in zip(t_cv, t_base)]
+        res["median_baseline_round_ratio"] = statistics.median(res["baseline_round_ratios"])
+        res["speedup_rounds"] = [b / o for b, o in zip(t_base, t_ours)]
+        res["median_speedup"] = statistics.median(res["speedup_rounds"])
+        res["baseline_positions_equal"] = base_pos == our_pos
     if args.json:
         print(json.dumps(res))
         return
@@ -124,6 +139,12 @@ def main():
           % (len(t_ours), res["fps_ours"], res["fps_opencv"], res["fps_ratio"]))
     print("per-round ratios (OpenCV time / siftlab time, back to back): %s; median %.2fx"
           % (", ".join("%.2f" % r for r in res["round_ratios"]), res["median_round_ratio"]))
+    if t_base:
+        print("baseline %s, same rounds: OpenCV time / baseline time %s; median %.2fx"
+              % (args.baseline, ", ".join("%.2f" % r for r in res["baseline_round_ratios"]), res["median_baseline_round_ratio"]))
+        print("speed-up of %s over the baseline (per round): %s; median %.2fx; estimates %s"
+              % (args.binary, ", ".join("%.2f" % r for r in res["speedup_rounds"]), res["median_speedup"],
+                 "identical" if res["baseline_positions_equal"] else "DIFFER"))
 
 
 if __name__ == "__main__":
