@@ -99,28 +99,39 @@ thread_local! {
 /// Number of workers: one per frame of a pair.
 const WORKERS: usize = 2;
 
-fn spawn(index: usize, script: &str) -> Result<Slot, String> {
+/// Starts a module worker running `script`: its messages, decoded, go to
+/// `on_message` (an undecodable one is logged); a failed start or a panic
+/// (wasm aborts, the instance is unusable) calls `on_crash`. The closures
+/// must live as long as the worker.
+fn start_worker(
+    script: &str,
+    on_message: impl Fn(FromWorker) + 'static,
+    on_crash: impl Fn() + 'static,
+) -> Result<(web_sys::Worker, Vec<Closure<dyn FnMut(JsValue)>>), String> {
     let opts = web_sys::WorkerOptions::new();
     opts.set_type(web_sys::WorkerType::Module);
-    let worker = web_sys::Worker::new_with_options(script, &opts)
-        .map_err(|e| format!("cannot start the SIFT worker: {e:?}"))?;
+    let worker = web_sys::Worker::new_with_options(script, &opts).map_err(|e| format!("cannot start a worker: {e:?}"))?;
     let on_message = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
         let data = ev.unchecked_into::<web_sys::MessageEvent>().data();
         match FromWorker::from_js(&data) {
-            Ok(m) => on_worker_message(index, m),
+            Ok(m) => on_message(m),
             Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
         }
     });
     let on_error = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
-        // A failed load or a panic (wasm aborts): the instance is unusable.
         if let Some(e) = ev.dyn_ref::<web_sys::ErrorEvent>() {
             e.prevent_default();
         }
-        on_worker_crash(index);
+        on_crash();
     });
     worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
     worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
-    Ok(Slot { worker, ready: false, queue: VecDeque::new(), load: 0, _handlers: vec![on_message, on_error] })
+    Ok((worker, vec![on_message, on_error]))
+}
+
+fn spawn(index: usize, script: &str) -> Result<Slot, String> {
+    let (worker, handlers) = start_worker(script, move |m| on_worker_message(index, m), move || on_worker_crash(index))?;
+    Ok(Slot { worker, ready: false, queue: VecDeque::new(), load: 0, _handlers: handlers })
 }
 
 fn on_worker_message(index: usize, m: FromWorker) {
@@ -344,27 +355,13 @@ pub fn run_vo(frames: Vec<Vec<u8>>, poses: String, on_event: impl Fn(FromWorker)
     stop_vo();
     let script = POOL.with(|p| p.borrow().script.clone());
     let spawn_peer = |role: Role| -> Result<Peer, String> {
-        let opts = web_sys::WorkerOptions::new();
-        opts.set_type(web_sys::WorkerType::Module);
-        let worker =
-            web_sys::Worker::new_with_options(&script, &opts).map_err(|e| format!("cannot start the worker: {e:?}"))?;
-        let on_message = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
-            let data = e.unchecked_into::<web_sys::MessageEvent>().data();
-            match FromWorker::from_js(&data) {
-                Ok(m) => on_vo_message(role, m),
-                Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
-            }
-        });
-        let on_error = Closure::<dyn FnMut(JsValue)>::new(move |e: JsValue| {
-            if let Some(e) = e.dyn_ref::<web_sys::ErrorEvent>() {
-                e.prevent_default();
-            }
-            let message = "the odometry worker failed (it could not start, or ran out of memory)";
-            on_vo_message(role, FromWorker::Failed { id: VO_ID, message: message.into() });
-        });
-        worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
-        worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
-        Ok(Peer { worker, ready: false, queue: Vec::new(), busy: false, _handlers: vec![on_message, on_error] })
+        let message = "the odometry worker failed (it could not start, or ran out of memory)";
+        let (worker, handlers) = start_worker(
+            &script,
+            move |m| on_vo_message(role, m),
+            move || on_vo_message(role, FromWorker::Failed { id: VO_ID, message: message.into() }),
+        )?;
+        Ok(Peer { worker, ready: false, queue: Vec::new(), busy: false, _handlers: handlers })
     };
     let mut tracker = spawn_peer(Role::Tracker)?;
     let helpers = (0..VO_HELPERS).map(|i| spawn_peer(Role::Helper(i))).collect::<Result<Vec<_>, _>>()?;
