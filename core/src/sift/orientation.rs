@@ -52,7 +52,7 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
     let cap = ((2 * radius + 1) * (2 * radius + 1)) as usize;
     let mut dxs = Vec::with_capacity(cap);
     let mut dys = Vec::with_capacity(cap);
-    let mut ws = Vec::with_capacity(cap);
+    let mut wts = Vec::with_capacity(cap);
     prefetch_window(img, r, c, radius as usize + 1);
     // The Gaussian weight exp((i² + j²)·scale) of each distinct i² + j² once:
     // the same f32 argument gives the same weight, and a window has about a
@@ -82,14 +82,13 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
         dxs.extend(row[x0 + 1..x1 + 1].iter().zip(&row[x0 - 1..x1 - 1]).map(|(&a, &b)| a - b));
         dys.extend(up[x0..x1].iter().zip(&down[x0..x1]).map(|(&a, &b)| a - b));
         let ii = i * i;
-        ws.extend((j0 as i32..=j1 as i32).map(|j| weight_of[(ii + j * j) as usize]));
+        wts.extend((j0 as i32..=j1 as i32).map(|j| weight_of[(ii + j * j) as usize]));
     }
     let len = dxs.len();
     let simd_len = len - len % lanes;
     let mut t = [0f32; 36 + 4];
     // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
     let (oris, mags) = gradient_directions(&dxs, &dys);
-    let wts = &ws;
     for k in 0..len {
         let (wt, ori, mag) = (wts[k], oris[k], mags[k]);
         let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
@@ -132,11 +131,11 @@ fn prefetch_window(img: &Plane, r: usize, c: usize, reach: usize) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        let (y0, y1) = (r.saturating_sub(reach), (r + reach).min(img.height.saturating_sub(1)));
-        let (x0, x1) = (c.saturating_sub(reach), (c + reach).min(img.width.saturating_sub(1)));
-        if img.width == 0 {
+        if img.width == 0 || img.height == 0 {
             return;
         }
+        let (y0, y1) = (r.saturating_sub(reach), (r + reach).min(img.height - 1));
+        let (x0, x1) = (c.saturating_sub(reach), (c + reach).min(img.width - 1));
         for y in y0..=y1 {
             let row = img.row(y);
             // One prefetch per 64-byte line the row's span touches.
