@@ -312,7 +312,10 @@ struct Peer {
     worker: web_sys::Worker,
     ready: bool,
     queue: Vec<JsValue>,
-    busy: bool,
+    /// The frame a helper is detecting.
+    busy: Option<usize>,
+    /// A helper that crashed gets no more frames.
+    dead: bool,
     _handlers: Vec<Closure<dyn FnMut(JsValue)>>,
 }
 
@@ -355,13 +358,8 @@ pub fn run_vo(frames: Vec<Vec<u8>>, poses: String, on_event: impl Fn(FromWorker)
     stop_vo();
     let script = POOL.with(|p| p.borrow().script.clone());
     let spawn_peer = |role: Role| -> Result<Peer, String> {
-        let message = "the odometry worker failed (it could not start, or ran out of memory)";
-        let (worker, handlers) = start_worker(
-            &script,
-            move |m| on_vo_message(role, m),
-            move || on_vo_message(role, FromWorker::Failed { id: VO_ID, message: message.into() }),
-        )?;
-        Ok(Peer { worker, ready: false, queue: Vec::new(), busy: false, _handlers: handlers })
+        let (worker, handlers) = start_worker(&script, move |m| on_vo_message(role, m), move || on_vo_crash(role))?;
+        Ok(Peer { worker, ready: false, queue: Vec::new(), busy: None, dead: false, _handlers: handlers })
     };
     let mut tracker = spawn_peer(Role::Tracker)?;
     let helpers = (0..VO_HELPERS).map(|i| spawn_peer(Role::Helper(i))).collect::<Result<Vec<_>, _>>()?;
@@ -397,12 +395,13 @@ impl VoRun {
             while self.next_detect < self.frames.len() && self.detected[self.next_detect].is_some() {
                 self.next_detect += 1;
             }
-            if self.helpers[h].busy || self.next_detect >= self.frames.len() {
+            let helper = &self.helpers[h];
+            if helper.busy.is_some() || helper.dead || self.next_detect >= self.frames.len() {
                 continue;
             }
             let i = self.next_detect;
             self.next_detect += 1;
-            self.helpers[h].busy = true;
+            self.helpers[h].busy = Some(i);
             self.helpers[h].send(ToWorker::Detect { frame: i as u32, bytes: self.frames[i].clone() }.to_js());
         }
         if self.tracking || self.next_track >= self.frames.len() {
@@ -413,6 +412,44 @@ impl VoRun {
         self.next_track += 1;
         self.tracking = true;
         self.tracker.send(ToWorker::VoFrame { id: VO_ID, frame: i as u32, bytes: self.frames[i].clone(), points }.to_js());
+    }
+
+    /// A helper that could not detect its frame (a broken file, or the
+    /// helper crashed): the tracker detects that frame itself, so a broken
+    /// frame fails there, in frame order after the steps before it, with
+    /// the one-worker loop's message.
+    fn detect_in_tracker(&mut self, h: usize) {
+        if let Some(i) = self.helpers[h].busy.take() {
+            self.detected[i] = Some(None);
+        }
+    }
+}
+
+/// A worker of the run crashed: a helper's frame goes to the tracker and
+/// the run goes on without it; the tracker's crash ends the run.
+fn on_vo_crash(role: Role) {
+    let forward = VO_RUN.with(|r| {
+        let mut r = r.borrow_mut();
+        let run = r.as_mut()?;
+        if run.over {
+            return None;
+        }
+        match role {
+            Role::Helper(h) => {
+                run.helpers[h].dead = true;
+                run.detect_in_tracker(h);
+                run.feed();
+                None
+            }
+            Role::Tracker => {
+                run.over = true;
+                let message = "the odometry worker failed (it could not start, or ran out of memory)";
+                Some((run.on_event.clone(), FromWorker::Failed { id: VO_ID, message: message.into() }))
+            }
+        }
+    });
+    if let Some((on_event, m)) = forward {
+        on_event(m);
     }
 }
 
@@ -438,10 +475,14 @@ fn on_vo_message(role: Role, m: FromWorker) {
         }
         let forward = match (&role, &m) {
             (Role::Helper(h), FromWorker::Detected { frame, points }) => {
-                run.helpers[*h].busy = false;
+                run.helpers[*h].busy = None;
                 if let Some(d) = run.detected.get_mut(*frame as usize) {
                     *d = Some(Some(points.clone()));
                 }
+                None
+            }
+            (Role::Helper(h), FromWorker::Failed { .. }) => {
+                run.detect_in_tracker(*h);
                 None
             }
             (Role::Tracker, FromWorker::VoStep { .. }) => {

@@ -329,6 +329,20 @@ test('visual odometry on the demo frames equals the CLI view_trajectory', async 
   assert.ok(png.equals(fs.readFileSync(path.join(tmp, 'trajectory.png'))), 'trajectory.png differs from the CLI');
   await page.locator('.trajectory').screenshot({ path: path.join(SHOTS, 'trajectory.png') });
   fs.rmSync(tmp, { recursive: true });
+  // A broken frame 3 in a MyKITTI folder: the detection helpers leave it to the
+  // tracker, which fails on it in frame order, after the steps before it, with
+  // the one-worker loop's message.
+  const broken = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-broken-'));
+  fs.cpSync(path.join(ROOT, DATASET), broken, { recursive: true });
+  fs.writeFileSync(path.join(broken, 'gray/00/image_0/000003.png'), fs.readFileSync(FRAME(3)).subarray(0, 20000));
+  await page.setInputFiles(tid('folder'), broken);
+  await idle();
+  await page.fill(tid('vo-frames'), '5');
+  await page.click(tid('vo-run'));
+  await page.waitForSelector(tid('vo-error'), { timeout: 300000 });
+  assert.match(await page.textContent(tid('vo-error')), /^frame 3: .*(corrupt|truncated)/);
+  assert.match(await page.textContent(tid('vo-progress')), /frame 3 \/ 5/);
+  fs.rmSync(broken, { recursive: true });
 });
 
 test('view_feature and view_info exports equal the CLI PNGs byte for byte', async () => {
