@@ -21,6 +21,8 @@ pub struct FrameData {
     pub features: Features,
     pub decode_ms: f64,
     pub sift_ms: f64,
+    /// How the worker computed SIFT's multiply-adds (shown with the timing).
+    pub engine: String,
     /// The file's bytes, to re-run SIFT when the OpenCV SIMD width changes.
     pub bytes: Arc<Vec<u8>>,
     pub lanes: usize,
@@ -40,6 +42,7 @@ impl FrameData {
             features: r.features,
             decode_ms: r.decode_ms,
             sift_ms: r.sift_ms,
+            engine: r.engine,
         }
     }
 }

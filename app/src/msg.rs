@@ -39,6 +39,8 @@ pub struct SiftResult {
     pub features: Features,
     pub decode_ms: f64,
     pub sift_ms: f64,
+    /// How the worker's build computes SIFT's multiply-adds (`fma_engine`).
+    pub engine: String,
 }
 
 /// Worker → page.
@@ -252,6 +254,7 @@ impl FromWorker {
                 set(&o, "desc", &Uint8Array::from(desc.as_slice()).into());
                 set(&o, "decodeMs", &result.decode_ms.into());
                 set(&o, "siftMs", &result.sift_ms.into());
+                set(&o, "engine", &result.engine.as_str().into());
             }
         }
         o.into()
@@ -334,6 +337,7 @@ impl FromWorker {
                         features: Features { keypoints, descriptors },
                         decode_ms: get_f64(v, "decodeMs")?,
                         sift_ms: get_f64(v, "siftMs")?,
+                        engine: get_str(v, "engine")?,
                     },
                 })
             }

@@ -47,6 +47,7 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
                     features,
                     decode_ms: t1 - t0,
                     sift_ms: t2 - t1,
+                    engine: siftlab_core::sift::num::fma_engine().to_string(),
                 },
             });
         }

@@ -65,6 +65,7 @@ fn frame(i: usize) -> Arc<FrameData> {
         features,
         decode_ms: 0.0,
         sift_ms: 0.0,
+        engine: String::new(),
         bytes: Arc::new(Vec::new()),
         lanes: 8,
     })
@@ -327,7 +328,7 @@ async fn url_state_round_trips_through_a_fresh_lab() {
 #[wasm_bindgen_test]
 fn worker_messages_round_trip_bit_for_bit() {
     let (w, h, features) = golden(2);
-    let result = SiftResult { width: w, height: h, gray: vec![7; w * h], features, decode_ms: 1.5, sift_ms: 250.0 };
+    let result = SiftResult { width: w, height: h, gray: vec![7; w * h], features, decode_ms: 1.5, sift_ms: 250.0, engine: "SIMD128: exact multiply-add emulation".into() };
     let m = FromWorker::Done { id: 3, result };
     assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
     let s = ToWorker::Sift { id: 4, bytes: vec![1, 2, 3], lanes: 16 };

@@ -3,8 +3,10 @@
 //! WebAssembly has no fused multiply-add, so this is where an FMA emulation that is not
 //! exact would show.
 //!
-//! Run by tests/run:
-//! `cargo test --release --target wasm32-unknown-unknown -p siftlab-core --no-default-features`
+//! Run by tests/run, twice: the portable build and the relaxed-SIMD one (the worker
+//! www/worker.js loads where relaxed SIMD validates), which adds the test that its
+//! fused path is the one these tests ran:
+//! `cargo test --release --target wasm32-unknown-unknown -p siftlab-core --no-default-features [--features relaxed-simd]`
 
 #![cfg(target_arch = "wasm32")]
 
@@ -224,6 +226,47 @@ fn simd_fma_emulation_equals_the_scalar_one() {
         }
     }
     assert_eq!(checked, 1_000_000);
+}
+
+/// The relaxed-SIMD build (`--features relaxed-simd`; www/worker.js loads it wherever
+/// relaxed SIMD validates): Chromium's `f32x4.relaxed_madd` is fused, so every other test
+/// of this run (SIFT against OpenCV, the blur against the scalar filter) went through the
+/// engine's FMA and not the emulation; and that FMA, as `num::fma` uses it, equals the
+/// exact emulation on random triples and on halfway, zero and subnormal cases.
+#[cfg(feature = "relaxed-simd")]
+#[wasm_bindgen_test]
+fn relaxed_madd_is_fused_here_and_equals_the_exact_fma() {
+    use siftlab_core::sift::num::{fma, fma_emulated, fma_engine, relaxed_madd_is_fused};
+    assert!(
+        relaxed_madd_is_fused(),
+        "this engine's relaxed_madd is not fused: the relaxed build falls back to the emulation, \
+         and this run did not test its fused path"
+    );
+    assert!(fma_engine().starts_with("relaxed SIMD"), "{}", fma_engine());
+    let mut state = 0xD1B5_4A32_D192_ED03u64;
+    let mut next = || {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        state
+    };
+    let mut random = |lo: u32| f32::from_bits((next() as u32 & 0x807F_FFFF) | lo);
+    let one_plus = 1.0f32 + f32::EPSILON;
+    let special = [
+        (one_plus, one_plus, -1.0),
+        (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, 0.0),
+        (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, -(1.0 + 1.0 / 2048.0)),
+        (3.0, 5.0, -15.0),
+        (1e-20, 1e-20, 0.0),
+        (1e-20, -1e-20, 1e-39),
+    ];
+    for &(a, b, c) in &special {
+        assert_eq!(fma(a, b, c).to_bits(), fma_emulated(a, b, c).to_bits(), "{a} * {b} + {c}");
+    }
+    for _ in 0..1_000_000 {
+        let (a, b, c) = (random(0x3F00_0000), random(0x4000_0000), random(0x3F80_0000));
+        assert_eq!(fma(a, b, c).to_bits(), fma_emulated(a, b, c).to_bits(), "{a} * {b} + {c}");
+    }
 }
 
 include!("../src/vo/testdata/lk_golden.rs");

@@ -116,6 +116,12 @@ test('demo: counts and nndr 0.8 tuples equal the native CLI; URL restores the vi
   // SIFT time per frame as the page measured it in its worker.
   const infos = await page.$$eval('.slot-info', (els) => els.map((e) => e.textContent));
   metrics.chromiumSiftMs = infos.map((s) => Number((s.match(/SIFT (\d+) ms/) || [])[1]));
+  // Chromium has relaxed SIMD, so worker.js loaded the relaxed build, and its
+  // relaxed_madd is fused: SIFT ran on the engine's FMA (the counts above and the
+  // tuples below are that build's).
+  for (const which of ['prev', 'cur']) {
+    assert.equal((await page.textContent(tid(`keypoint-count-${which}-engine`))).trim(), 'relaxed SIMD');
+  }
   metrics.nativeSift = [0, 1].map((id) => execFileSync(CLI, ['sift', FRAME(id)], { cwd: ROOT, encoding: 'utf8' }).trim());
   const n = sift[0].keypoints.length;
   let nonEmpty = 0;
@@ -150,6 +156,23 @@ test('demo: counts and nndr 0.8 tuples equal the native CLI; URL restores the vi
   await idle(p2);
   assert.equal(await tuple(p2), cliRet(['-a', 'nndr', '-t', '0.8', '1', '123']));
   await p2.close();
+});
+
+test('?wasm=portable: the SIMD128 worker build gives the same keypoints and tuples', async () => {
+  const t0 = Date.now();
+  await page.goto(`${BASE}?lanes=${LANES}&wasm=portable`);
+  await idle();
+  metrics.demoReadyMsPortable = Date.now() - t0;
+  const infos = await page.$$eval('.slot-info', (els) => els.map((e) => e.textContent));
+  metrics.chromiumSiftMsPortable = infos.map((s) => Number((s.match(/SIFT (\d+) ms/) || [])[1]));
+  for (const [i, which] of ['prev', 'cur'].entries()) {
+    assert.equal((await page.textContent(tid(`keypoint-count-${which}-engine`))).trim(), 'SIMD128');
+    assert.equal(await page.textContent(tid(`keypoint-count-${which}`)), String(cliSift(i).keypoints.length));
+  }
+  for (const f of [7, 123, 1024]) {
+    await settings('nndr', '0.8', f);
+    assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', String(f)]), `feature ${f}`);
+  }
 });
 
 test('default view (AVX2 build) equals the CLI with --opencv-lanes 8', async () => {

@@ -1,6 +1,10 @@
-// SIFT time per frame: the app's worker in headless Chromium vs the native CLI, interleaved in
-// one run on the same frames (tests/fixtures/mykitti, frames 0-5), one frame at a time.
-//   BASE_URL=http://127.0.0.1:8080/ node tests/e2e/bench.mjs     (dist/ served, CLI built)
+// The app's speed in headless Chromium, both worker builds, against the native CLI, interleaved
+// in one run on the same frames (tests/fixtures/mykitti, frames 0-5):
+// - SIFT (detect+compute) per frame, one frame at a time: the relaxed-SIMD worker (the default
+//   where relaxed SIMD validates), the SIMD128 worker (`?wasm=portable`), the CLI on all cores
+//   and on one core;
+// - the odometry view on the demo frames, each build in turn, `--vo-rounds` times.
+//   BASE_URL=http://127.0.0.1:8080/ node tests/e2e/bench.mjs [--vo-rounds 2]   (dist/ served, CLI built)
 import { execFileSync } from 'node:child_process';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -11,32 +15,59 @@ const BASE = process.env.BASE_URL || 'http://127.0.0.1:8080/';
 const CLI = path.join(ROOT, 'target/release/siftlab');
 const frame = (i) => path.join(ROOT, 'tests/fixtures/mykitti/gray/00/image_0', String(i).padStart(6, '0') + '.png');
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
+const arg = process.argv.indexOf('--vo-rounds');
+const voRounds = arg > 0 ? Number(process.argv[arg + 1]) : 2;
 
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
   args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run', '--disable-component-update', '--disable-sync'],
 });
-const page = await browser.newPage();
+const builds = { relaxed: '', portable: '&wasm=portable' };
 // src=folder: no demo autoload, so exactly one SIFT runs at a time.
-await page.goto(`${BASE}?src=folder`);
-const wasm = [];
+const pages = {};
+for (const [name, q] of Object.entries(builds)) {
+  pages[name] = await browser.newPage();
+  await pages[name].goto(`${BASE}?src=folder${q}`);
+}
+const sift = { relaxed: [], portable: [] };
 const native = [];
 const nativeOneThread = [];
 for (let i = 0; i < 6; i++) {
-  await page.setInputFiles('[data-testid="frame-prev"]', frame(i));
-  await page.waitForFunction((n) => new RegExp(`${n}\\.png.*SIFT \\d+ ms`).test(document.querySelector('.slots').textContent),
-    String(i).padStart(6, '0'), { timeout: 300000 });
-  const text = await page.textContent('.slots');
-  wasm.push(Number(text.match(/SIFT (\d+) ms/)[1]));
+  for (const [name, page] of Object.entries(pages)) {
+    await page.setInputFiles('[data-testid="frame-prev"]', frame(i));
+    await page.waitForFunction((n) => new RegExp(`${n}\\.png.*SIFT \\d+ ms`).test(document.querySelector('.slots').textContent),
+      String(i).padStart(6, '0'), { timeout: 300000 });
+    sift[name].push(Number((await page.textContent('.slots')).match(/SIFT (\d+) ms/)[1]));
+  }
   const ms = (cmd, args) => Number(execFileSync(cmd, args, { encoding: 'utf8' }).match(/in ([\d.]+) ms/)[1]);
   native.push(ms(CLI, ['--opencv-lanes', '8', 'sift', frame(i)]));
   // One core, like the single worker (Rust's available_parallelism follows the affinity mask).
   nativeOneThread.push(ms('taskset', ['-c', '0', CLI, '--opencv-lanes', '8', 'sift', frame(i)]));
 }
+for (const page of Object.values(pages)) await page.close();
+
+// The odometry view on the demo frames: its own "over N frames · S s" figure.
+const vo = { relaxed: [], portable: [] };
+for (let r = 0; r < voRounds; r++) {
+  for (const [name, q] of Object.entries(builds)) {
+    const page = await browser.newPage();
+    await page.goto(`${BASE}?${q.slice(1)}`);
+    await page.waitForSelector('[data-testid="keypoint-count-cur"]', { timeout: 300000 });
+    await page.waitForSelector('[data-testid="busy"]', { state: 'detached', timeout: 300000 });
+    await page.click('[data-testid="vo-run"]');
+    await page.waitForSelector('[data-testid="vo-ate"]', { timeout: 300000 });
+    const m = (await page.textContent('.trajectory')).match(/over (\d+) frames · ([\d.]+) s/);
+    vo[name].push({ frames: Number(m[1]), s: Number(m[2]) });
+    await page.close();
+  }
+}
 await browser.close();
 const r = {
-  chromiumWasmMs: wasm, nativeMs: native, nativeOneCoreMs: nativeOneThread,
-  medianChromiumMs: median(wasm), medianNativeMs: median(native), medianNativeOneCoreMs: median(nativeOneThread),
-  ratio: +(median(wasm) / median(native)).toFixed(2), ratioOneCore: +(median(wasm) / median(nativeOneThread)).toFixed(2),
+  chromiumSiftMs: sift, nativeMs: native, nativeOneCoreMs: nativeOneThread,
+  median: { relaxed: median(sift.relaxed), portable: median(sift.portable), native: median(native), nativeOneCore: median(nativeOneThread) },
+  relaxedSpeedup: +(median(sift.portable) / median(sift.relaxed)).toFixed(2),
+  relaxedVsNativeOneCore: +(median(sift.relaxed) / median(nativeOneThread)).toFixed(2),
+  vo,
+  voFramesPerS: Object.fromEntries(Object.entries(vo).map(([k, v]) => [k, v.map((x) => +(x.frames / x.s).toFixed(2))])),
 };
 console.log(JSON.stringify(r, null, 2));

@@ -62,7 +62,11 @@ fn FrameSlot(which: Which, testid: &'static str) -> impl IntoView {
                         <span class="fname">{f.label.clone()}</span>
                         <span class="muted">{format!(" · {}×{} · ", f.width, f.height)}</span>
                         <strong data-testid=count_id>{f.features.keypoints.len()}</strong>
-                        <span class="muted">{format!(" keypoints · SIFT {:.0} ms", f.sift_ms)}</span>
+                        <span class="muted">{format!(" keypoints · SIFT {:.0} ms · ", f.sift_ms)}</span>
+                        // The build's multiply-add path: its first words shown, all of it on hover.
+                        <span class="muted engine" title=f.engine.clone() data-testid=format!("{count_id}-engine")>
+                            {f.engine.split(':').next().unwrap_or_default().to_string()}
+                        </span>
                     }.into_any(),
                     None => view! {
                         <span class="muted">"no frame yet — pick or drop a PNG/JPEG"</span>

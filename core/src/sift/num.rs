@@ -19,10 +19,27 @@ pub fn fma(a: f32, b: f32, c: f32) -> f32 {
 /// round-to-odd (TwoSum gives the exact error) and then round once to f32.
 /// Round-to-odd in a format with >= 2 extra bits makes the double rounding
 /// equal to a single correct rounding.
+///
+/// The relaxed-SIMD build uses the engine's `relaxed_madd` instead where it
+/// is fused ([`relaxed_madd_is_fused`]): the same single rounding.
 #[cfg(target_arch = "wasm32")]
 #[inline(always)]
 pub fn fma(a: f32, b: f32, c: f32) -> f32 {
+    #[cfg(feature = "relaxed-simd")]
+    if relaxed_madd_is_fused() {
+        return fused_madd(a, b, c);
+    }
     fma_emulated(a, b, c)
+}
+
+/// One lane of `f32x4.relaxed_madd`. Inlined into the callers compiled with
+/// relaxed SIMD (`with_hw_fma!`), a call elsewhere.
+#[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
+#[target_feature(enable = "relaxed-simd")]
+#[inline]
+pub fn fused_madd(a: f32, b: f32, c: f32) -> f32 {
+    use core::arch::wasm32::*;
+    f32x4_extract_lane::<0>(f32x4_relaxed_madd(f32x4_splat(a), f32x4_splat(b), f32x4_splat(c)))
 }
 
 /// The f64 round-to-odd emulation of [`fma`], exposed so native tests can
@@ -88,6 +105,64 @@ pub fn fma_emulated_x4(a: core::arch::wasm32::v128, b: f32, c: core::arch::wasm3
         );
     }
     i32x4_shuffle::<0, 1, 4, 5>(f32x4_demote_f64x2_zero(lo), f32x4_demote_f64x2_zero(hi))
+}
+
+/// How this build computes the Gaussian blur's fused multiply-adds, for the
+/// app to show next to its SIFT timings (the blur is most of wasm SIFT).
+pub fn fma_engine() -> &'static str {
+    #[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
+    return if relaxed_madd_is_fused() {
+        "relaxed SIMD: the engine's fused multiply-add"
+    } else {
+        "SIMD128: exact multiply-add emulation (this engine's relaxed_madd is not fused)"
+    };
+    #[cfg(all(target_arch = "wasm32", not(feature = "relaxed-simd")))]
+    return "SIMD128: exact multiply-add emulation";
+    #[cfg(not(target_arch = "wasm32"))]
+    "native fused multiply-add"
+}
+
+/// Whether this engine's `f32x4.relaxed_madd` is a fused multiply-add.
+///
+/// Relaxed SIMD lets an engine compute `relaxed_madd(a, b, c)` either fused
+/// (one rounding, OpenCV's FMA) or as a multiply then an add (two). V8 and
+/// SpiderMonkey fuse it on CPUs with FMA (all x86-64 since 2013, every
+/// arm64), and the build with the `relaxed-simd` feature uses it then as the
+/// blur's one-instruction FMA. The probe asks a case where the two differ,
+/// on every lane: (1 + 2⁻¹²)² − (1 + 2⁻¹¹) is 2⁻²⁴ fused but 0 unfused (the
+/// product's 2⁻²⁴ is a tie that rounds away). Anything but the fused answer
+/// keeps the exact emulation.
+#[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
+pub fn relaxed_madd_is_fused() -> bool {
+    use core::sync::atomic::{AtomicU8, Ordering};
+    // 0: not probed yet, 1: fused, 2: not fused.
+    static FUSED: AtomicU8 = AtomicU8::new(0);
+    match FUSED.load(Ordering::Relaxed) {
+        1 => true,
+        2 => false,
+        _ => {
+            // A wasm module is validated whole before it runs, so calling a
+            // relaxed-simd function is safe: this build only loads where
+            // relaxed SIMD validates (www/worker.js checks before choosing it).
+            let fused = probe_relaxed_madd();
+            FUSED.store(if fused { 1 } else { 2 }, Ordering::Relaxed);
+            fused
+        }
+    }
+}
+
+#[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
+#[target_feature(enable = "relaxed-simd")]
+fn probe_relaxed_madd() -> bool {
+    use core::arch::wasm32::*;
+    let a = 1.0 + f32::EPSILON * 2048.0; // 1 + 2^-12
+    let c = -(1.0 + f32::EPSILON * 4096.0); // -(1 + 2^-11)
+    // black_box: the answer must come from the engine, not from LLVM folding.
+    let (a, c) = (core::hint::black_box(f32x4_splat(a)), core::hint::black_box(f32x4_splat(c)));
+    let got = f32x4_relaxed_madd(a, a, c);
+    let want = f32x4_splat(f32::EPSILON / 2.0); // 2^-24
+    // Bitwise: all four lanes must hold exactly 2^-24.
+    i32x4_all_true(i32x4_eq(got, want))
 }
 
 /// `cvRound` on floats: `lrintf` in the default rounding mode.
@@ -182,7 +257,17 @@ macro_rules! with_hw_fma {
                 $body
             }
         }
-        #[cfg(not(target_arch = "x86_64"))]
+        #[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
+        {
+            // The relaxed-SIMD build: compiled with relaxed SIMD so that each
+            // `fma` inside inlines to one `relaxed_madd` when the engine fuses it.
+            #[target_feature(enable = "relaxed-simd")]
+            fn fast<F: FnOnce() -> $ret>(f: F) -> $ret {
+                f()
+            }
+            fast(|| $body)
+        }
+        #[cfg(not(any(target_arch = "x86_64", all(target_arch = "wasm32", feature = "relaxed-simd"))))]
         {
             $body
         }
