@@ -345,7 +345,7 @@ test('visual odometry on the demo frames equals the CLI view_trajectory', async 
   const ate = out.match(/trajectory error \(ATE RMSE, \d+ frames\): ([\d.]+) m/)[1];
   assert.equal(await page.textContent(tid('vo-ate')), `${ate} m`);
   assert.match(await page.textContent(tid('vo-progress')), new RegExp(`frame ${n} / ${n}`));
-  metrics.voChromium = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s/)?.[0];
+  metrics.voChromium = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
   // The lab's window as a PNG: the same bytes the CLI writes.
   const [download] = await Promise.all([page.waitForEvent('download'), page.click(tid('vo-download'))]);
   const png = fs.readFileSync(await download.path());

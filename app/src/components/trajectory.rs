@@ -185,7 +185,11 @@ pub fn TrajectoryView() -> impl IntoView {
                 <p>
                     "Trajectory error (RMSE, no alignment, GT scale): "
                     <strong data-testid="vo-ate">{format!("{:.4} m", d.ate)}</strong>
-                    {format!(" over {} frames · {:.1} s", steps.with(|s| s.len()), d.ms / 1000.0)}
+                    {
+                        let n = steps.with(|s| s.len());
+                        let fps = if d.ms > 0.0 { format!(" ({:.1} frames/s)", n as f64 * 1000.0 / d.ms) } else { String::new() };
+                        format!(" over {n} frames · {:.1} s{fps}", d.ms / 1000.0)
+                    }
                     {d.png_url.map(|u| view! { " · " <a href=u download="trajectory.png" data-testid="vo-download">"download trajectory.png"</a> })}
                 </p>
             })}
