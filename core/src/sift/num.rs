@@ -125,10 +125,9 @@ pub fn fma_engine() -> &'static str {
 /// Whether this engine's `f32x4.relaxed_madd` is a fused multiply-add.
 ///
 /// Relaxed SIMD lets an engine compute `relaxed_madd(a, b, c)` either fused
-/// (one rounding, OpenCV's FMA) or as a multiply then an add (two). V8 and
-/// SpiderMonkey fuse it on CPUs with FMA (all x86-64 since 2013, every
-/// arm64), and the build with the `relaxed-simd` feature uses it then as the
-/// blur's one-instruction FMA. The probe asks a case where the two differ,
+/// (one rounding, OpenCV's FMA) or as a multiply then an add (two). V8
+/// fuses it on CPUs with FMA, and the build with the `relaxed-simd` feature
+/// then uses it as SIFT's one-instruction FMA. The probe asks a case where the two differ,
 /// on every lane: (1 + 2⁻¹²)² − (1 + 2⁻¹¹) is 2⁻²⁴ fused but 0 unfused (the
 /// product's 2⁻²⁴ is a tie that rounds away). Anything but the fused answer
 /// keeps the exact emulation.
