@@ -4,7 +4,10 @@
 //   where relaxed SIMD validates), the SIMD128 worker (`?wasm=portable`), the CLI on all cores
 //   and on one core;
 // - the odometry view on the demo frames, each build in turn, `--vo-rounds` times.
-//   BASE_URL=http://127.0.0.1:8080/ node tests/e2e/bench.mjs [--vo-rounds 2]   (dist/ served, CLI built)
+//   BASE_URL=http://127.0.0.1:8080/ node tests/e2e/bench.mjs [--vo-rounds 2] [--vo-dataset DIR --vo-frames N]
+// (dist/ served, CLI built). --vo-dataset runs the odometry on N frames of a MyKITTI folder
+// (e.g. target/synthkitti, 100 frames) instead of the demo, and checks its trajectory error
+// against the CLI's view_trajectory on the same frames.
 import { execFileSync } from 'node:child_process';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -17,6 +20,9 @@ const frame = (i) => path.join(ROOT, 'tests/fixtures/mykitti/gray/00/image_0', S
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const arg = process.argv.indexOf('--vo-rounds');
 const voRounds = arg > 0 ? Number(process.argv[arg + 1]) : 2;
+const opt = (name) => { const i = process.argv.indexOf(name); return i > 0 ? process.argv[i + 1] : undefined; };
+const voDataset = opt('--vo-dataset') && path.resolve(opt('--vo-dataset'));
+const voFrames = opt('--vo-frames');
 
 const browser = await chromium.launch({
   executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
@@ -54,20 +60,31 @@ for (let r = 0; r < voRounds; r++) {
     await page.goto(`${BASE}?${q.slice(1)}`);
     await page.waitForSelector('[data-testid="keypoint-count-cur"]', { timeout: 300000 });
     await page.waitForSelector('[data-testid="busy"]', { state: 'detached', timeout: 300000 });
+    if (voDataset) {
+      await page.setInputFiles('[data-testid="folder"]', voDataset);
+      await page.waitForSelector('[data-testid="busy"]', { state: 'detached', timeout: 300000 });
+      if (voFrames) await page.fill('[data-testid="vo-frames"]', voFrames);
+    }
     await page.click('[data-testid="vo-run"]');
-    await page.waitForSelector('[data-testid="vo-ate"]', { timeout: 300000 });
+    await page.waitForSelector('[data-testid="vo-ate"]', { timeout: 1800000 });
     const m = (await page.textContent('.trajectory')).match(/over (\d+) frames · ([\d.]+) s/);
-    vo[name].push({ frames: Number(m[1]), s: Number(m[2]) });
+    vo[name].push({ frames: Number(m[1]), s: Number(m[2]), ate: (await page.textContent('[data-testid="vo-ate"]')).trim() });
     await page.close();
   }
 }
 await browser.close();
+// The CLI on the same frames: the page's trajectory error must be the same text.
+const frames = vo.relaxed[0]?.frames;
+const cliOut = execFileSync(CLI, ['-d', voDataset || path.join(ROOT, 'tests/fixtures/mykitti'), 'view_trajectory', String(frames), '--output', '/dev/null'], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'ignore'] });
+const cliAte = `${cliOut.match(/trajectory error \(ATE RMSE, \d+ frames\): ([\d.]+) m/)[1]} m`;
 const r = {
   chromiumSiftMs: sift, nativeMs: native, nativeOneCoreMs: nativeOneThread,
   median: { relaxed: median(sift.relaxed), portable: median(sift.portable), native: median(native), nativeOneCore: median(nativeOneThread) },
   relaxedSpeedup: +(median(sift.portable) / median(sift.relaxed)).toFixed(2),
   relaxedVsNativeOneCore: +(median(sift.relaxed) / median(nativeOneThread)).toFixed(2),
   vo,
+  cliAte,
+  ateEqual: Object.values(vo).every((runs) => runs.every((x) => x.ate === cliAte)),
   voFramesPerS: Object.fromEntries(Object.entries(vo).map(([k, v]) => [k, v.map((x) => +(x.frames / x.s).toFixed(2))])),
 };
 console.log(JSON.stringify(r, null, 2));
