@@ -20,8 +20,15 @@ const RELAXED_MADD = new Uint8Array([
 const portable = new URL(self.location.href).searchParams.get('wasm') === 'portable';
 const relaxed = !portable && WebAssembly.validate(RELAXED_MADD);
 
-import(relaxed ? './pkg/siftlab_worker_relaxed.js' : './pkg/siftlab_worker.js')
-  .then((m) => m.default())
+const start = (build) => import(`./pkg/${build}.js`).then((m) => m.default());
+(relaxed
+  // A relaxed build that cannot start (a partial deployment, an engine that validates
+  // relaxed SIMD but fails to compile it) leaves the SIMD128 one to try.
+  ? start('siftlab_worker_relaxed').catch((e) => {
+    console.warn('siftlab: the relaxed-SIMD worker did not start, using the SIMD128 one:', e);
+    return start('siftlab_worker');
+  })
+  : start('siftlab_worker'))
   .catch((e) => {
     // Surface start-up failures as a worker `error` event on the page side.
     setTimeout(() => { throw e; });

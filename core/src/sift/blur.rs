@@ -93,8 +93,9 @@ fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
         let row = |m: usize, x0: usize, x1: usize| &buf[m * w + x0..m * w + x1];
         // Whether the wasm column pass may take its fast path (see `wasm::tame`);
         // checked once per band, not per strip, as it costs a pass over the rows.
+        // (Not needed where the relaxed build has a fused multiply-add.)
         #[cfg(target_arch = "wasm32")]
-        let tame = wasm::tame_kernel(&ky[c..]) && wasm::tame(&buf[..(b1 - b0 + 2 * c) * w]);
+        let tame = !wasm::fused() && wasm::tame_kernel(&ky[c..]) && wasm::tame(&buf[..(b1 - b0 + 2 * c) * w]);
         #[cfg(not(target_arch = "wasm32"))]
         let tame = false;
         let mut pairs: Vec<(&[f32], &[f32])> = Vec::with_capacity(c);
@@ -276,6 +277,16 @@ pub(crate) mod wasm {
     use core::arch::wasm32::*;
 
     const V: usize = 4; // vectors per block
+
+    /// Whether this is the relaxed build on an engine whose `relaxed_madd`
+    /// is fused: then both passes take the `*_fused` kernels.
+    #[inline(always)]
+    pub fn fused() -> bool {
+        #[cfg(feature = "relaxed-simd")]
+        return super::super::num::relaxed_madd_is_fused();
+        #[cfg(not(feature = "relaxed-simd"))]
+        false
+    }
 
     fn load(s: &[f32], i: usize) -> v128 {
         let s = &s[i..i + 4];
@@ -567,7 +578,7 @@ fn accumulate_row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
         }
     }
     #[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
-    if super::num::relaxed_madd_is_fused() {
+    if wasm::fused() {
         return wasm::row_fused(padded, kx, dst);
     }
     #[cfg(target_arch = "wasm32")]
@@ -595,7 +606,7 @@ fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst
         }
     }
     #[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
-    if super::num::relaxed_madd_is_fused() {
+    if wasm::fused() {
         return wasm::column_fused(centre, pairs, ky, dst);
     }
     #[cfg(target_arch = "wasm32")]
