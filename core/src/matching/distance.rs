@@ -106,7 +106,7 @@ fn norm_sq(t: &[u8; 128]) -> i32 {
 }
 
 /// Distances from each of several queries to every train descriptor, as
-/// `out[i * train.len() + j]` = distance(queries[i], train[j]); `out` must
+/// `out[i * train.len() + j]` = `distance(queries[i], train[j])`; `out` must
 /// hold `queries.len() * train.len()` values (extra entries are left
 /// untouched, missing ones are not computed).
 ///

@@ -1,5 +1,5 @@
 //! The images the lab's commands draw, reproduced with the `image` crate only:
-//! `cv2.drawMatchesKnn(..., flags=2)` for `view_feature` ([`matches`]), the
+//! `cv2.drawMatchesKnn(..., flags=2)` for `view_feature` ([`matches`](mod@matches)), the
 //! `view_info` composite ([`info`]) and the `view_trajectory` window
 //! ([`trajectory`]). Everything here is plain Rust and runs on wasm too.
 //!

@@ -239,6 +239,8 @@ pub fn pow2f_glibc(y: f32) -> f32 {
 /// compiled with AVX2+FMA when the CPU has them, so every [`fma`] inside is
 /// one instruction instead of a call to the C library's `fmaf`; target
 /// features do not reach functions that are not inlined, hence the macro.
+/// In the wasm relaxed-SIMD build the body is compiled with relaxed SIMD,
+/// so that [`fused_madd`] inlines into each [`fma`] there.
 #[macro_export]
 #[doc(hidden)]
 macro_rules! with_hw_fma {

@@ -1,7 +1,7 @@
 //! The lab's monocular visual odometry, stage by stage as OpenCV 4.8 computes
 //! it (`../shared/docs/opencv-vo-4.8.md`): [`lk`] tracks points
 //! (`calcOpticalFlowPyrLK`), [`ransac`] estimates the essential matrix with the
-//! [`five_point`] kernel (`findEssentialMat`), [`recover_pose`] picks R, t
+//! [`five_point`] kernel (`findEssentialMat`), [`recover_pose`](fn@recover_pose) picks R, t
 //! (`recoverPose`), [`odometry`] is the lab's accumulation loop, [`metrics`]
 //! scores a trajectory against ground truth.
 
