@@ -185,6 +185,28 @@ fn matching_in_the_browser_equals_the_lab() {
     assert!(failures.is_empty(), "{} of {checked} differ:\n{}", failures.len(), failures.join("\n"));
 }
 
+/// Multiply-adds where an FMA is easy to get wrong.
+const FMA_SPECIAL: [(f32, f32, f32); 6] = [
+    (1.0 + f32::EPSILON, 1.0 + f32::EPSILON, -1.0), // exact result 2^-22 + 2^-46: halfway in f64
+    (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, 0.0),  // 1 + 2^-11 + 2^-24: an f32 halfway point
+    (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, -(1.0 + 1.0 / 2048.0)), // 2^-24 fused, 0 unfused
+    (3.0, 5.0, -15.0),                               // exact zero
+    (1e-20, 1e-20, 0.0),                             // f32-subnormal product
+    (1e-20, -1e-20, 1e-39),                          // subnormal sum
+];
+
+/// Random f32s: `random(lo)` takes the sign and mantissa bits of an xorshift draw
+/// and `lo` as its exponent bits.
+fn random_f32(seed: u64) -> impl FnMut(u32) -> f32 {
+    let mut state = seed;
+    move |lo| {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        f32::from_bits((state as u32 & 0x807F_FFFF) | lo)
+    }
+}
+
 /// The lane-wise FMA emulation the wasm blur uses equals the scalar one (itself tested
 /// against hardware FMA natively) on random triples and on sums that land exactly on an
 /// f32 halfway point, zero or an f32-subnormal magnitude (the lanes that take the fallback).
@@ -192,24 +214,10 @@ fn matching_in_the_browser_equals_the_lab() {
 fn simd_fma_emulation_equals_the_scalar_one() {
     use core::arch::wasm32::*;
     use siftlab_core::sift::num::{fma_emulated, fma_emulated_x4};
-    let mut state = 0x9E37_79B9_7F4A_7C15u64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
-    let mut random = |lo: u32| f32::from_bits((next() as u32 & 0x807F_FFFF) | lo);
-    let one_plus = 1.0f32 + f32::EPSILON;
-    let special = [
-        (one_plus, one_plus, -1.0),                     // exact result 2^-22 + 2^-46: halfway in f64
-        (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, 0.0), // 1 + 2^-11 + 2^-24: an f32 halfway point
-        (3.0, 5.0, -15.0),                              // exact zero
-        (1e-20, 1e-20, 0.0),                            // f32-subnormal product
-    ];
+    let mut random = random_f32(0x9E37_79B9_7F4A_7C15);
     let mut checked = 0;
     for round in 0..250_000 {
-        let (a, b, c) = match special.get(round) {
+        let (a, b, c) = match FMA_SPECIAL.get(round) {
             // The special case in lane 2, random values around it.
             Some(&(x, y, z)) => ([random(0x3F00_0000), random(0x4000_0000), x, random(0x3E00_0000)], y, [random(0x3300_0000), random(0x4300_0000), z, random(0x3F00_0000)]),
             None => (
@@ -243,24 +251,8 @@ fn relaxed_madd_is_fused_here_and_equals_the_exact_fma() {
          and this run did not test its fused path"
     );
     assert!(fma_engine().starts_with("relaxed SIMD"), "{}", fma_engine());
-    let mut state = 0xD1B5_4A32_D192_ED03u64;
-    let mut next = || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
-    let mut random = |lo: u32| f32::from_bits((next() as u32 & 0x807F_FFFF) | lo);
-    let one_plus = 1.0f32 + f32::EPSILON;
-    let special = [
-        (one_plus, one_plus, -1.0),
-        (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, 0.0),
-        (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, -(1.0 + 1.0 / 2048.0)),
-        (3.0, 5.0, -15.0),
-        (1e-20, 1e-20, 0.0),
-        (1e-20, -1e-20, 1e-39),
-    ];
-    for &(a, b, c) in &special {
+    let mut random = random_f32(0xD1B5_4A32_D192_ED03);
+    for &(a, b, c) in &FMA_SPECIAL {
         assert_eq!(fma(a, b, c).to_bits(), fma_emulated(a, b, c).to_bits(), "{a} * {b} + {c}");
     }
     for _ in 0..1_000_000 {

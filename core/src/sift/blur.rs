@@ -273,7 +273,7 @@ mod x86 {
 /// emulation, four vectors per block; the rest of the row pixel by pixel.
 #[cfg(target_arch = "wasm32")]
 pub(crate) mod wasm {
-    use super::super::num::{fma, fma_emulated_x4};
+    use super::super::num::{fma, fma_emulated_x4, load4 as load, store4 as store};
     use core::arch::wasm32::*;
 
     const V: usize = 4; // vectors per block
@@ -288,17 +288,6 @@ pub(crate) mod wasm {
         false
     }
 
-    fn load(s: &[f32], i: usize) -> v128 {
-        let s = &s[i..i + 4];
-        // SAFETY: `s` holds exactly four f32; v128_load needs no alignment.
-        unsafe { v128_load(s.as_ptr().cast()) }
-    }
-
-    fn store(d: &mut [f32], i: usize, v: v128) {
-        let d = &mut d[i..i + 4];
-        // SAFETY: `d` holds exactly four f32; v128_store needs no alignment.
-        unsafe { v128_store(d.as_mut_ptr().cast(), v) }
-    }
 
     // The fast path. `fma_emulated_x4` checks every sum for the two cases
     // where rounding the f64 sum to f32 can differ from a fused multiply-add:

@@ -287,19 +287,8 @@ mod x86 {
 /// lies beyond the threshold.
 #[cfg(target_arch = "wasm32")]
 mod wasm {
+    use super::super::num::{load4 as load, store4 as store};
     use core::arch::wasm32::*;
-
-    fn load(s: &[f32], i: usize) -> v128 {
-        let s = &s[i..i + 4];
-        // SAFETY: `s` holds exactly four f32; v128_load needs no alignment.
-        unsafe { v128_load(s.as_ptr().cast()) }
-    }
-
-    fn store(d: &mut [f32], i: usize, v: v128) {
-        let d = &mut d[i..i + 4];
-        // SAFETY: `d` holds exactly four f32; v128_store needs no alignment.
-        unsafe { v128_store(d.as_mut_ptr().cast(), v) }
-    }
 
     /// Returns the first column not examined (the scalar tail starts there).
     /// Needs every row to extend one pixel past `cols.end` and `cols.start >= 1`.

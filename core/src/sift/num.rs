@@ -164,6 +164,25 @@ fn probe_relaxed_madd() -> bool {
     i32x4_all_true(i32x4_eq(got, want))
 }
 
+/// Four f32 from `s[i..i + 4]` as one v128 (bounds-checked), for the wasm
+/// kernels of the blur and the extremum scan.
+#[cfg(target_arch = "wasm32")]
+#[inline(always)]
+pub(crate) fn load4(s: &[f32], i: usize) -> core::arch::wasm32::v128 {
+    let s = &s[i..i + 4];
+    // SAFETY: `s` holds exactly four f32; v128_load needs no alignment.
+    unsafe { core::arch::wasm32::v128_load(s.as_ptr().cast()) }
+}
+
+/// Stores one v128 as the four f32 of `d[i..i + 4]` (bounds-checked).
+#[cfg(target_arch = "wasm32")]
+#[inline(always)]
+pub(crate) fn store4(d: &mut [f32], i: usize, v: core::arch::wasm32::v128) {
+    let d = &mut d[i..i + 4];
+    // SAFETY: `d` holds exactly four f32; v128_store needs no alignment.
+    unsafe { core::arch::wasm32::v128_store(d.as_mut_ptr().cast(), v) }
+}
+
 /// `cvRound` on floats: `lrintf` in the default rounding mode.
 #[inline(always)]
 pub fn rne(x: f32) -> i32 {
