@@ -107,8 +107,8 @@ pub fn fma_emulated_x4(a: core::arch::wasm32::v128, b: f32, c: core::arch::wasm3
     i32x4_shuffle::<0, 1, 4, 5>(f32x4_demote_f64x2_zero(lo), f32x4_demote_f64x2_zero(hi))
 }
 
-/// How this build computes the Gaussian blur's fused multiply-adds, for the
-/// app to show next to its SIFT timings (the blur is most of wasm SIFT).
+/// How this build computes SIFT's fused multiply-adds (the blur's are most
+/// of wasm SIFT's time), for the app to show next to its SIFT timings.
 pub fn fma_engine() -> &'static str {
     #[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
     return if relaxed_madd_is_fused() {
@@ -127,10 +127,10 @@ pub fn fma_engine() -> &'static str {
 /// Relaxed SIMD lets an engine compute `relaxed_madd(a, b, c)` either fused
 /// (one rounding, OpenCV's FMA) or as a multiply then an add (two). V8
 /// fuses it on CPUs with FMA, and the build with the `relaxed-simd` feature
-/// then uses it as SIFT's one-instruction FMA. The probe asks a case where the two differ,
-/// on every lane: (1 + 2⁻¹²)² − (1 + 2⁻¹¹) is 2⁻²⁴ fused but 0 unfused (the
-/// product's 2⁻²⁴ is a tie that rounds away). Anything but the fused answer
-/// keeps the exact emulation.
+/// then uses it as SIFT's one-instruction FMA. The probe asks a case where
+/// the two differ, on every lane: (1 + 2⁻¹²)² − (1 + 2⁻¹¹) is 2⁻²⁴ fused but
+/// 0 unfused (the product's 2⁻²⁴ is a tie that rounds away). Anything but
+/// the fused answer keeps the exact emulation.
 #[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
 pub fn relaxed_madd_is_fused() -> bool {
     use core::sync::atomic::{AtomicU8, Ordering};
