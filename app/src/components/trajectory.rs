@@ -51,6 +51,8 @@ pub fn TrajectoryView() -> impl IntoView {
     let done = RwSignal::new(None::<Done>);
     let frame_url = RwSignal::new(None::<String>);
     let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
+    // When the workers got the frames: the live rate counts from there.
+    let started_ms = StoredValue::new(0.0f64);
     let available = move || lab.source.with(run_length);
     Effect::new(move |_| n_text.set(available().to_string()));
 
@@ -81,6 +83,7 @@ pub fn TrajectoryView() -> impl IntoView {
                 }
             };
             frames.set_value(fr.clone());
+            started_ms.set_value(crate::worker::now_ms());
             let started = client::run_vo(fr, poses, move |m| match m {
                 FromWorker::VoStep { frame, position, truth, .. } => {
                     steps.update(|s| s.push((frame, position, truth)));
@@ -172,7 +175,18 @@ pub fn TrajectoryView() -> impl IntoView {
             <Show when=move || running.get() || !steps.with(|s| s.is_empty())>
                 <div class="vo-progress" data-testid="vo-progress">
                     <div class="pbar"><div class="pbar-fill" style:width=move || format!("{:.1}%", 100.0 * steps.with(|s| s.len()) as f64 / total.get().max(1) as f64)></div></div>
-                    <span class="muted">{move || format!("frame {} / {}", steps.with(|s| s.len()), total.get())}</span>
+                    <span class="muted">{move || {
+                        let n = steps.with(|s| s.len());
+                        // The rate so far, updated with each step while the run lasts
+                        // (then the run's own figure, with the error, replaces it).
+                        let elapsed = crate::worker::now_ms() - started_ms.get_value();
+                        let rate = if running.get() && n >= 2 && elapsed > 0.0 {
+                            format!(" · {:.1} frames/s", n as f64 * 1000.0 / elapsed)
+                        } else {
+                            String::new()
+                        };
+                        format!("frame {n} / {}{rate}", total.get())
+                    }}</span>
                 </div>
                 <div class="vo-views">
                     <div class="vo-plot">{plot}</div>
