@@ -6,7 +6,8 @@ fn main() {
     // SIMD is available (www/worker.js): to compare the two, or as a way out if
     // an engine's relaxed build misbehaves. Read once, before any worker starts.
     let query = web_sys::window().and_then(|w| w.location().search().ok()).unwrap_or_default();
-    if query.trim_start_matches('?').split('&').any(|p| p == "wasm=portable") {
+    let params = web_sys::UrlSearchParams::new_with_str(&query).ok();
+    if params.and_then(|p| p.get("wasm")).as_deref() == Some("portable") {
         siftlab_app::client::set_worker_script("./worker.js?wasm=portable");
     }
     leptos::mount::mount_to_body(siftlab_app::App);
