@@ -207,7 +207,7 @@ fn random_f32(seed: u64) -> impl FnMut(u32) -> f32 {
     }
 }
 
-/// The lane-wise FMA emulation the wasm blur uses equals the scalar one (itself tested
+/// The lane-wise FMA emulation the wasm blur and gradient kernels use equals the scalar one (itself tested
 /// against hardware FMA natively) on random triples and on sums that land exactly on an
 /// f32 halfway point, zero or an f32-subnormal magnitude (the lanes that take the fallback).
 #[wasm_bindgen_test]
@@ -219,21 +219,65 @@ fn simd_fma_emulation_equals_the_scalar_one() {
     for round in 0..250_000 {
         let (a, b, c) = match FMA_SPECIAL.get(round) {
             // The special case in lane 2, random values around it.
-            Some(&(x, y, z)) => ([random(0x3F00_0000), random(0x4000_0000), x, random(0x3E00_0000)], y, [random(0x3300_0000), random(0x4300_0000), z, random(0x3F00_0000)]),
-            None => (
-                [random(0x3F00_0000), random(0x4000_0000), random(0x3E00_0000), random(0x4300_0000)],
-                random(0x3F00_0000),
-                [random(0x3300_0000), random(0x4300_0000), random(0x3F00_0000), -random(0x4000_0000)],
+            Some(&(x, y, z)) => (
+                [random(0x3F00_0000), random(0x4000_0000), x, random(0x3E00_0000)],
+                [random(0x3F00_0000), random(0x3E00_0000), y, random(0x3F00_0000)],
+                [random(0x3300_0000), random(0x4300_0000), z, random(0x3F00_0000)],
             ),
+            // Half the rounds with one weight in every lane, as the blur calls it.
+            None => {
+                let w = random(0x3F00_0000);
+                (
+                    [random(0x3F00_0000), random(0x4000_0000), random(0x3E00_0000), random(0x4300_0000)],
+                    if round % 2 == 0 { [w; 4] } else { [w, random(0x3E00_0000), random(0x4000_0000), random(0x3F00_0000)] },
+                    [random(0x3300_0000), random(0x4300_0000), random(0x3F00_0000), -random(0x4000_0000)],
+                )
+            }
         };
-        let got = fma_emulated_x4(f32x4(a[0], a[1], a[2], a[3]), b, f32x4(c[0], c[1], c[2], c[3]));
+        let v = |x: [f32; 4]| f32x4(x[0], x[1], x[2], x[3]);
+        let got = fma_emulated_x4(v(a), v(b), v(c));
         let got = [f32x4_extract_lane::<0>(got), f32x4_extract_lane::<1>(got), f32x4_extract_lane::<2>(got), f32x4_extract_lane::<3>(got)];
         for l in 0..4 {
-            assert_eq!(got[l].to_bits(), fma_emulated(a[l], b, c[l]).to_bits(), "lane {l}: {} * {b} + {}", a[l], c[l]);
+            assert_eq!(got[l].to_bits(), fma_emulated(a[l], b[l], c[l]).to_bits(), "lane {l}: {} * {} + {}", a[l], b[l], c[l]);
             checked += 1;
         }
     }
     assert_eq!(checked, 1_000_000);
+}
+
+/// The four-lane gradient kernels of orientation and descriptors (`num::x4`, behind
+/// `gradient_directions` and `gradient_samples`) equal the scalar `fast_atan2_deg`,
+/// `magnitude` and `exp32f` on every element: random differences of 8-bit-scale pixels,
+/// the axes and diagonals where fastAtan2's branches switch (±0 included), and exponents
+/// from 0 to beyond exp32f's clamp. Lengths not a multiple of 4 check the scalar tail.
+#[wasm_bindgen_test]
+fn gradient_kernels_equal_the_scalar_ones() {
+    use siftlab_core::sift::num::{exp32f, fast_atan2_deg, gradient_directions, gradient_samples, magnitude};
+    let mut random = random_f32(0x243F_6A88_85A3_08D3);
+    let edges = [0.0f32, -0.0, 1.0, -1.0, 0.5, -0.5, 255.0, -255.0, 1e-30, -1e-30];
+    let (mut dxs, mut dys) = (Vec::new(), Vec::new());
+    for &x in &edges {
+        for &y in &edges {
+            dxs.push(x);
+            dys.push(y);
+        }
+    }
+    for _ in 0..100_003 {
+        // |v| in [0.5, 256): the range of a difference of two pixels.
+        dxs.push(random(0x3F00_0000) * 2f32.powi((random(0x3F80_0000) * 8.0) as i32));
+        dys.push(random(0x3F00_0000) * 2f32.powi((random(0x3F80_0000) * 8.0) as i32));
+    }
+    let args: Vec<f32> = (0..dxs.len()).map(|i| if i % 97 == 0 { -3000.0 + i as f32 * 1e-3 } else { -random(0x3F80_0000).abs() * 40.0 }).collect();
+    let (oris, mags) = gradient_directions(&dxs, &dys);
+    let (oris2, mags2, wts) = gradient_samples(&dxs, &dys, &args);
+    for i in 0..dxs.len() {
+        let (x, y) = (dxs[i], dys[i]);
+        assert_eq!(oris[i].to_bits(), fast_atan2_deg(y, x).to_bits(), "atan2({y}, {x}) at {i}");
+        assert_eq!(mags[i].to_bits(), magnitude(x, y).to_bits(), "magnitude({x}, {y}) at {i}");
+        assert_eq!((oris2[i].to_bits(), mags2[i].to_bits()), (oris[i].to_bits(), mags[i].to_bits()));
+        assert_eq!(wts[i].to_bits(), exp32f(args[i]).to_bits(), "exp32f({}) at {i}", args[i]);
+    }
+    assert_eq!(dxs.len(), 100_103);
 }
 
 /// The relaxed-SIMD build (`--features relaxed-simd`; www/worker.js loads it wherever

@@ -522,6 +522,7 @@ pub(crate) mod wasm {
             let k0 = f32x4_splat(kx[0]);
             let mut acc: [v128; V] = core::array::from_fn(|v| f32x4_mul(load(padded, x + 4 * v), k0));
             for (k, &kv) in kx.iter().enumerate().skip(1) {
+                let kv = f32x4_splat(kv);
                 for (v, a) in acc.iter_mut().enumerate() {
                     *a = fma_emulated_x4(load(padded, x + k + 4 * v), kv, *a);
                 }
@@ -541,9 +542,10 @@ pub(crate) mod wasm {
             let kc = f32x4_splat(ky[0]);
             let mut acc: [v128; V] = core::array::from_fn(|v| f32x4_mul(load(centre, x + 4 * v), kc));
             for (k, (up, down)) in pairs.iter().enumerate() {
+                let kv = f32x4_splat(ky[k + 1]);
                 for (v, a) in acc.iter_mut().enumerate() {
                     let sum = f32x4_add(load(up, x + 4 * v), load(down, x + 4 * v));
-                    *a = fma_emulated_x4(sum, ky[k + 1], *a);
+                    *a = fma_emulated_x4(sum, kv, *a);
                 }
             }
             for (v, a) in acc.into_iter().enumerate() {

@@ -75,33 +75,30 @@ pub fn fma_emulated(a: f32, b: f32, c: f32) -> f32 {
     f64::from_bits(bits) as f32
 }
 
-/// [`fma_emulated`] on four lanes with WebAssembly SIMD: the same f64
-/// product and sum per lane, rounded to f32 together; a lane whose sum needs
+/// [`fma_emulated`] on four lanes with WebAssembly SIMD (`b` per lane too:
+/// a splat for the blur's weights): the same f64 product and sum per lane, rounded to f32 together; a lane whose sum needs
 /// the exact error (an f32 halfway point, an f32-subnormal magnitude) sends
 /// the four lanes through the scalar function, so results are identical.
 #[cfg(target_arch = "wasm32")]
 #[inline(always)]
-pub fn fma_emulated_x4(a: core::arch::wasm32::v128, b: f32, c: core::arch::wasm32::v128) -> core::arch::wasm32::v128 {
+pub fn fma_emulated_x4(a: core::arch::wasm32::v128, b: core::arch::wasm32::v128, c: core::arch::wasm32::v128) -> core::arch::wasm32::v128 {
     use core::arch::wasm32::*;
     let high = |v: v128| i32x4_shuffle::<2, 3, 0, 1>(v, v);
-    let bd = f64x2_splat(b as f64);
-    let lo = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(a), bd), f64x2_promote_low_f32x4(c));
-    let hi = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(high(a)), bd), f64x2_promote_low_f32x4(high(c)));
+    let lo = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(a), f64x2_promote_low_f32x4(b)), f64x2_promote_low_f32x4(c));
+    let hi = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(high(a)), f64x2_promote_low_f32x4(high(b))), f64x2_promote_low_f32x4(high(c)));
     let hard = |s: v128| {
         let midpoint = i64x2_eq(v128_and(s, i64x2_splat(0x1FFF_FFFF)), i64x2_splat(0x1000_0000));
         let tiny = v128_and(f64x2_lt(f64x2_abs(s), f64x2_splat(f32::MIN_POSITIVE as f64)), f64x2_ne(s, f64x2_splat(0.0)));
         v128_or(midpoint, tiny)
     };
     if v128_any_true(v128_or(hard(lo), hard(hi))) {
-        let (a, c) = (
-            [f32x4_extract_lane::<0>(a), f32x4_extract_lane::<1>(a), f32x4_extract_lane::<2>(a), f32x4_extract_lane::<3>(a)],
-            [f32x4_extract_lane::<0>(c), f32x4_extract_lane::<1>(c), f32x4_extract_lane::<2>(c), f32x4_extract_lane::<3>(c)],
-        );
+        let lanes = |v: v128| [f32x4_extract_lane::<0>(v), f32x4_extract_lane::<1>(v), f32x4_extract_lane::<2>(v), f32x4_extract_lane::<3>(v)];
+        let (a, b, c) = (lanes(a), lanes(b), lanes(c));
         return f32x4(
-            fma_emulated(a[0], b, c[0]),
-            fma_emulated(a[1], b, c[1]),
-            fma_emulated(a[2], b, c[2]),
-            fma_emulated(a[3], b, c[3]),
+            fma_emulated(a[0], b[0], c[0]),
+            fma_emulated(a[1], b[1], c[1]),
+            fma_emulated(a[2], b[2], c[2]),
+            fma_emulated(a[3], b[3], c[3]),
         );
     }
     i32x4_shuffle::<0, 1, 4, 5>(f32x4_demote_f64x2_zero(lo), f32x4_demote_f64x2_zero(hi))
@@ -300,7 +297,14 @@ macro_rules! with_hw_fma {
 #[inline(always)]
 pub fn gradient_samples(dxs: &[f32], dys: &[f32], w_args: &[f32]) -> (Vec<f32>, Vec<f32>, Vec<f32>) {
     let (oris, mags) = gradient_directions(dxs, dys);
-    let wts = w_args.iter().map(|&a| exp32f(a)).collect();
+    let mut wts = vec![0f32; w_args.len()];
+    #[cfg(target_arch = "wasm32")]
+    let done = x4::exp32f(w_args, &mut wts);
+    #[cfg(not(target_arch = "wasm32"))]
+    let done = 0;
+    for (w, &a) in wts.iter_mut().zip(w_args).skip(done) {
+        *w = exp32f(a);
+    }
     (oris, mags, wts)
 }
 
@@ -309,13 +313,171 @@ pub fn gradient_samples(dxs: &[f32], dys: &[f32], w_args: &[f32]) -> (Vec<f32>, 
 pub fn gradient_directions(dxs: &[f32], dys: &[f32]) -> (Vec<f32>, Vec<f32>) {
     let len = dxs.len();
     let (mut oris, mut mags) = (vec![0f32; len], vec![0f32; len]);
-    for k in 0..len {
+    #[cfg(target_arch = "wasm32")]
+    let done = x4::gradient_directions(dxs, dys, &mut oris, &mut mags);
+    #[cfg(not(target_arch = "wasm32"))]
+    let done = 0;
+    for k in done..len {
         oris[k] = fast_atan2_deg(dys[k], dxs[k]);
     }
-    for k in 0..len {
+    for k in done..len {
         mags[k] = magnitude(dxs[k], dys[k]);
     }
     (oris, mags)
+}
+
+/// WebAssembly has no autovectorised FMA (and [`fma`] there branches per
+/// call), so the gradient kernels of orientation and descriptors get four
+/// lanes by hand: [`fast_atan2_deg`], [`magnitude`] and [`exp32f`] with the
+/// same operations in the same order per lane, so the same bits. Each runs
+/// with the engine's fused `relaxed_madd` where the relaxed build found it
+/// fused, else with [`fma_emulated_x4`]; the caller finishes the last
+/// `len % 4` samples with the scalar kernels.
+#[cfg(target_arch = "wasm32")]
+pub(crate) mod x4 {
+    use super::{fma_emulated_x4, load4 as load, store4 as store};
+    use super::{ATAN_EPS, ATAN_P1, ATAN_P3, ATAN_P5, ATAN_P7, EXP_A1, EXP_A2, EXP_A3, EXP_A4, EXP_TAB};
+    use core::arch::wasm32::*;
+
+    /// A four-lane multiply-add with one rounding.
+    pub trait Fma4: Copy {
+        fn fma(self, a: v128, b: v128, c: v128) -> v128;
+    }
+
+    /// [`fma_emulated_x4`]: every engine.
+    #[derive(Clone, Copy)]
+    pub struct Emulated;
+
+    impl Fma4 for Emulated {
+        #[inline(always)]
+        fn fma(self, a: v128, b: v128, c: v128) -> v128 {
+            fma_emulated_x4(a, b, c)
+        }
+    }
+
+    /// The engine's `relaxed_madd`, only handed out by [`with_fma4`] after
+    /// the probe found it fused.
+    #[cfg(feature = "relaxed-simd")]
+    #[derive(Clone, Copy)]
+    pub struct Fused(());
+
+    #[cfg(feature = "relaxed-simd")]
+    impl Fma4 for Fused {
+        #[inline(always)]
+        fn fma(self, a: v128, b: v128, c: v128) -> v128 {
+            relaxed_madd(a, b, c)
+        }
+    }
+
+    #[cfg(feature = "relaxed-simd")]
+    #[target_feature(enable = "relaxed-simd")]
+    #[inline]
+    fn relaxed_madd(a: v128, b: v128, c: v128) -> v128 {
+        f32x4_relaxed_madd(a, b, c)
+    }
+
+    #[cfg(feature = "relaxed-simd")]
+    impl Fused {
+        /// Only after [`super::relaxed_madd_is_fused`] said so.
+        #[inline(always)]
+        pub(crate) fn new() -> Fused {
+            Fused(())
+        }
+    }
+
+    /// Defines `fn $name(args) -> R` that runs `$kernel(args, fma)` with the
+    /// engine's fused FMA where this build and engine have it, else with the
+    /// emulation. The fused call is compiled with relaxed SIMD so that each
+    /// `relaxed_madd` inlines into the kernel's loop.
+    macro_rules! dispatch_fma4 {
+        ($(#[$m:meta])* $vis:vis fn $name:ident($($arg:ident: $ty:ty),*) -> $ret:ty = $kernel:path) => {
+            $(#[$m])*
+            $vis fn $name($($arg: $ty),*) -> $ret {
+                #[cfg(feature = "relaxed-simd")]
+                if $crate::sift::num::relaxed_madd_is_fused() {
+                    #[target_feature(enable = "relaxed-simd")]
+                    fn fused($($arg: $ty),*) -> $ret {
+                        $kernel($($arg,)* $crate::sift::num::x4::Fused::new())
+                    }
+                    return fused($($arg),*);
+                }
+                $kernel($($arg,)* $crate::sift::num::x4::Emulated)
+            }
+        };
+    }
+    pub(crate) use dispatch_fma4;
+
+    /// `fast_atan2_deg` lane by lane; the three branches become selects.
+    #[inline(always)]
+    pub fn atan2_deg(y: v128, x: v128, f: impl Fma4) -> v128 {
+        let fma = |a, b, c| f.fma(a, b, c);
+        let k = f32x4_splat;
+        let (ax, ay) = (f32x4_abs(x), f32x4_abs(y));
+        let c = f32x4_div(f32x4_min(ax, ay), f32x4_add(f32x4_max(ax, ay), k(ATAN_EPS)));
+        let c2 = f32x4_mul(c, c);
+        let a = f32x4_mul(fma(fma(fma(c2, k(ATAN_P7), k(ATAN_P5)), c2, k(ATAN_P3)), c2, k(ATAN_P1)), c);
+        let a = v128_bitselect(a, f32x4_sub(k(90.0), a), f32x4_ge(ax, ay));
+        let a = v128_bitselect(f32x4_sub(k(180.0), a), a, f32x4_lt(x, k(0.0)));
+        v128_bitselect(f32x4_sub(k(360.0), a), a, f32x4_lt(y, k(0.0)))
+    }
+
+    /// `exp32f` lane by lane; the table lookup is four scalar loads.
+    #[inline(always)]
+    pub fn exp(x: v128, f: impl Fma4) -> v128 {
+        let fma = |a, b, c| f.fma(a, b, c);
+        let k = f32x4_splat;
+        let x = f32x4_mul(f32x4_min(f32x4_max(x, k(-2079.4417)), k(2079.4417)), k(f32::from_bits(0x42B8AA3B)));
+        let xi = i32x4_trunc_sat_f32x4(f32x4_nearest(x));
+        let xf = f32x4_mul(f32x4_sub(x, f32x4_convert_i32x4(xi)), k(0.015625));
+        let e = i32x4_min(i32x4_max(i32x4_add(i32x4_shr(xi, 6), i32x4_splat(127)), i32x4_splat(0)), i32x4_splat(255));
+        let t = |i: u32| f32::from_bits(EXP_TAB[(i & 63) as usize]);
+        let tab = f32x4(
+            t(u32x4_extract_lane::<0>(xi)),
+            t(u32x4_extract_lane::<1>(xi)),
+            t(u32x4_extract_lane::<2>(xi)),
+            t(u32x4_extract_lane::<3>(xi)),
+        );
+        let tab = f32x4_mul(tab, i32x4_shl(e, 23));
+        let mut z = f32x4_add(xf, k(EXP_A1));
+        z = fma(z, xf, k(EXP_A2));
+        z = fma(z, xf, k(EXP_A3));
+        z = fma(z, xf, k(EXP_A4));
+        f32x4_mul(z, tab)
+    }
+
+    #[inline(always)]
+    fn directions_with(dxs: &[f32], dys: &[f32], oris: &mut [f32], mags: &mut [f32], f: impl Fma4) -> usize {
+        let n = dxs.len().min(dys.len()).min(oris.len()).min(mags.len());
+        let mut k = 0;
+        while k + 4 <= n {
+            let (x, y) = (load(dxs, k), load(dys, k));
+            store(oris, k, atan2_deg(y, x, f));
+            store(mags, k, f32x4_sqrt(f.fma(x, x, f32x4_mul(y, y))));
+            k += 4;
+        }
+        k
+    }
+
+    dispatch_fma4! {
+        /// Orientations and magnitudes of samples `0..` (a multiple of 4); returns how many.
+        pub fn gradient_directions(dxs: &[f32], dys: &[f32], oris: &mut [f32], mags: &mut [f32]) -> usize = directions_with
+    }
+
+    #[inline(always)]
+    fn exp_with(args: &[f32], out: &mut [f32], f: impl Fma4) -> usize {
+        let n = args.len().min(out.len());
+        let mut k = 0;
+        while k + 4 <= n {
+            store(out, k, exp(load(args, k), f));
+            k += 4;
+        }
+        k
+    }
+
+    dispatch_fma4! {
+        /// `exp32f` of `args[0..]` (a multiple of 4) into `out`; returns how many.
+        pub fn exp32f(args: &[f32], out: &mut [f32]) -> usize = exp_with
+    }
 }
 
 // fastAtan2 coefficients: the f32 product of each coefficient and (f32)(180/pi).
