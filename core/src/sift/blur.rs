@@ -369,8 +369,10 @@ pub(crate) mod wasm {
                 let mut hard = i64x2_splat(0);
                 for (k, &kv) in kx.iter().enumerate().skip(1) {
                     let kv = f64x2_splat(kv as f64);
+                    // One bounds check per tap, not one per vector.
+                    let src = &wide[x + k..x + k + 2 * P];
                     for (q, a) in acc.iter_mut().enumerate() {
-                        let s = f64x2_add(f64x2_mul(load_f64(&wide, x + k + 2 * q), kv), *a);
+                        let s = f64x2_add(f64x2_mul(load_f64(src, 2 * q), kv), *a);
                         hard = v128_or(hard, halfway(s));
                         *a = round_to_f32(s);
                     }
@@ -411,8 +413,9 @@ pub(crate) mod wasm {
             let mut hard = i64x2_splat(0);
             for (k, (up, down)) in pairs.iter().enumerate() {
                 let kv = f64x2_splat(ky[k + 1] as f64);
+                let (up, down) = (&up[x..x + 2 * P], &down[x..x + 2 * P]);
                 for q in 0..P / 2 {
-                    let sum = f32x4_add(load(up, x + 4 * q), load(down, x + 4 * q));
+                    let sum = f32x4_add(load(up, 4 * q), load(down, 4 * q));
                     for (h, part) in [sum, high(sum)].into_iter().enumerate() {
                         let a = &mut acc[2 * q + h];
                         let s = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(part), kv), *a);
@@ -454,8 +457,10 @@ pub(crate) mod wasm {
         let mut acc: [v128; B] = core::array::from_fn(|v| f32x4_mul(load(padded, x + 4 * v), k0));
         for (k, &kv) in kx.iter().enumerate().skip(1) {
             let kv = f32x4_splat(kv);
+            // One bounds check per tap, not one per vector.
+            let src = &padded[x + k..x + k + 4 * B];
             for (v, a) in acc.iter_mut().enumerate() {
-                *a = f32x4_relaxed_madd(load(padded, x + k + 4 * v), kv, *a);
+                *a = f32x4_relaxed_madd(load(src, 4 * v), kv, *a);
             }
         }
         for (v, a) in acc.into_iter().enumerate() {
@@ -486,8 +491,9 @@ pub(crate) mod wasm {
         let mut acc: [v128; B] = core::array::from_fn(|v| f32x4_mul(load(centre, x + 4 * v), kc));
         for (k, (up, down)) in pairs.iter().enumerate() {
             let kv = f32x4_splat(ky[k + 1]);
+            let (up, down) = (&up[x..x + 4 * B], &down[x..x + 4 * B]);
             for (v, a) in acc.iter_mut().enumerate() {
-                let sum = f32x4_add(load(up, x + 4 * v), load(down, x + 4 * v));
+                let sum = f32x4_add(load(up, 4 * v), load(down, 4 * v));
                 *a = f32x4_relaxed_madd(sum, kv, *a);
             }
         }
