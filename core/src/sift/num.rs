@@ -76,9 +76,10 @@ pub fn fma_emulated(a: f32, b: f32, c: f32) -> f32 {
 }
 
 /// [`fma_emulated`] on four lanes with WebAssembly SIMD (`b` per lane too:
-/// a splat for the blur's weights): the same f64 product and sum per lane, rounded to f32 together; a lane whose sum needs
-/// the exact error (an f32 halfway point, an f32-subnormal magnitude) sends
-/// the four lanes through the scalar function, so results are identical.
+/// a splat for the blur's weights): the same f64 product and sum per lane,
+/// rounded to f32 together; a lane whose sum needs the exact error (an f32
+/// halfway point, an f32-subnormal magnitude) sends the four lanes through
+/// the scalar function, so results are identical.
 #[cfg(target_arch = "wasm32")]
 #[inline(always)]
 pub fn fma_emulated_x4(a: core::arch::wasm32::v128, b: core::arch::wasm32::v128, c: core::arch::wasm32::v128) -> core::arch::wasm32::v128 {
@@ -355,8 +356,8 @@ pub(crate) mod x4 {
         }
     }
 
-    /// The engine's `relaxed_madd`, only handed out by [`with_fma4`] after
-    /// the probe found it fused.
+    /// The engine's `relaxed_madd`, only handed out by `dispatch_fma4!`
+    /// after the probe found it fused.
     #[cfg(feature = "relaxed-simd")]
     #[derive(Clone, Copy)]
     pub struct Fused(());
