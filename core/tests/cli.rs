@@ -396,3 +396,28 @@ fn tiny_images_give_zero_keypoints_not_a_crash() {
     let _ = fs::remove_dir_all(&root);
     let _ = fs::remove_dir_all(&dir);
 }
+
+#[test]
+fn a_broken_frame_stops_view_trajectory_with_the_error_on_its_own_line() {
+    let ds = scratch("broken-frame");
+    let frames = ds.join("gray/00/image_0");
+    fs::create_dir_all(&frames).unwrap();
+    fs::create_dir_all(ds.join("poses")).unwrap();
+    fs::copy(dataset().join("poses/00.txt"), ds.join("poses/00.txt")).unwrap();
+    for i in 0..5 {
+        let name = format!("{i:06}.png");
+        fs::copy(dataset().join("gray/00/image_0").join(&name), frames.join(&name)).unwrap();
+    }
+    fs::write(frames.join("000005.png"), b"not a png").unwrap();
+    let o = siftlab_in(&ds, &["-d", ds.to_str().unwrap(), "view_trajectory", "6"]);
+    assert_fails(&o, &["frame 5", "000005.png", "not an image"], "broken frame 5");
+    let err = stderr(&o);
+    // Five frames of SIFT take well over the bar's 100 ms refresh: it was drawn.
+    assert!(err.contains("/6 frames"), "no progress bar before the error\nstderr: {err:?}");
+    assert!(
+        err.lines().any(|l| l.starts_with("siftlab: error: frame 5")),
+        "the error must start its own line, not follow the progress bar\nstderr: {err:?}"
+    );
+    assert!(!ds.join("trajectory.png").exists(), "no trajectory.png from a failed run");
+    let _ = fs::remove_dir_all(&ds);
+}

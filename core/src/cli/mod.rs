@@ -132,9 +132,13 @@ pub fn run(cli: &Cli) -> Result<()> {
             };
             let root = expand_home(&cli.dataset);
             let mut last = std::time::Instant::now();
+            // Whether the bar's line is open: an error must start on a line
+            // of its own, not after "1/3 frames".
+            let mut open = false;
             let mut progress = |done: usize, total: usize| {
                 if done == total || last.elapsed().as_millis() >= 100 {
                     last = std::time::Instant::now();
+                    open = done != total;
                     let w = 40;
                     let filled = if total == 0 { w } else { done * w / total };
                     eprint!("\r[{}{}] {done}/{total} frames", "#".repeat(filled), " ".repeat(w - filled));
@@ -143,8 +147,11 @@ pub fn run(cli: &Cli) -> Result<()> {
                     }
                 }
             };
-            let text = trajectory::view_trajectory(&root, frames, a.save_poses.as_deref(), &a.output, &mut progress)?;
-            println!("{text}");
+            let result = trajectory::view_trajectory(&root, frames, a.save_poses.as_deref(), &a.output, &mut progress);
+            if open && result.is_err() {
+                eprintln!();
+            }
+            println!("{}", result?);
             Ok(())
         }
         Command::Sift(a) => run_sift(cli, a),
