@@ -16,6 +16,7 @@ pub mod matching;
 pub mod pyfmt;
 pub mod render;
 pub mod sift;
+pub mod simd;
 pub mod vo;
 
 pub use error::{Error, Result};

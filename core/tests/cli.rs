@@ -421,3 +421,30 @@ fn a_broken_frame_stops_view_trajectory_with_the_error_on_its_own_line() {
     assert!(!ds.join("trajectory.png").exists(), "no trajectory.png from a failed run");
     let _ = fs::remove_dir_all(&ds);
 }
+
+#[test]
+fn siftlab_simd_caps_the_kernels_without_changing_the_result() {
+    let frame = dataset().join(format!("gray/00/image_0/{}.png", first_golden_frame()));
+    let lanes = golden_lanes().to_string();
+    let sift = |level: Option<&str>| {
+        let mut cmd = Command::new(env!("CARGO_BIN_EXE_siftlab"));
+        cmd.args(["--opencv-lanes", &lanes, "sift", frame.to_str().unwrap(), "--json"]);
+        match level {
+            Some(l) => cmd.env("SIFTLAB_SIMD", l),
+            None => cmd.env_remove("SIFTLAB_SIMD"),
+        };
+        cmd.output().expect("cannot start the siftlab binary")
+    };
+    let uncapped = sift(None);
+    assert!(uncapped.status.success(), "{}", stderr(&uncapped));
+    assert!(stdout(&uncapped).contains("\"keypoints\""));
+    for level in ["avx2", "scalar", "AVX512"] {
+        let o = sift(Some(level));
+        assert!(o.status.success(), "SIFTLAB_SIMD={level}: {}", stderr(&o));
+        assert!(stdout(&o) == stdout(&uncapped), "SIFTLAB_SIMD={level} changed the keypoints or descriptors");
+    }
+    let o = sift(Some("sse4"));
+    assert_eq!(o.status.code(), Some(2), "an unknown level is a usage error");
+    assert!(stderr(&o).contains("SIFTLAB_SIMD=sse4 is not a SIMD level: use scalar, avx2 or avx512"), "{}", stderr(&o));
+    assert!(stdout(&o).is_empty());
+}

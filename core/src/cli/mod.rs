@@ -91,6 +91,17 @@ pub struct SiftArgs {
 /// Runs the CLI; returns the process exit code.
 pub fn main() -> i32 {
     let cli = Cli::parse();
+    // SIFTLAB_SIMD caps the kernels (see `crate::simd`): results are the same
+    // at every level, only the time differs.
+    if let Some(v) = std::env::var_os("SIFTLAB_SIMD") {
+        match v.to_str().and_then(crate::simd::SimdLevel::parse) {
+            Some(level) => crate::simd::set_cap(level),
+            None => {
+                eprintln!("siftlab: error: SIFTLAB_SIMD={} is not a SIMD level: use scalar, avx2 or avx512 (or unset it)", v.to_string_lossy());
+                return 2;
+            }
+        }
+    }
     match run(&cli) {
         Ok(()) => 0,
         Err(e) => {

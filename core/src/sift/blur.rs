@@ -567,10 +567,10 @@ fn accumulate_row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY (both calls): the CPU supports the features the function was compiled for.
-        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("fma") {
+        if crate::simd::avx512f_fma() {
             return unsafe { x86::row_avx512(padded, kx, dst) };
         }
-        if std::is_x86_feature_detected!("fma") && std::is_x86_feature_detected!("avx2") {
+        if crate::simd::avx2_fma() {
             return unsafe { x86::row_avx2(padded, kx, dst) };
         }
     }
@@ -595,10 +595,10 @@ fn accumulate_column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY (both calls): the CPU supports the features the function was compiled for.
-        if std::is_x86_feature_detected!("avx512f") && std::is_x86_feature_detected!("fma") {
+        if crate::simd::avx512f_fma() {
             return unsafe { x86::column_avx512(centre, pairs, ky, dst) };
         }
-        if std::is_x86_feature_detected!("fma") && std::is_x86_feature_detected!("avx2") {
+        if crate::simd::avx2_fma() {
             return unsafe { x86::column_avx2(centre, pairs, ky, dst) };
         }
     }

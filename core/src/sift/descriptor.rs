@@ -185,7 +185,7 @@ fn collect_samples(img: &Plane, px: i64, py: i64, radius: i64, cos_t: f32, sin_t
         let c0 = (px + j0) as usize;
         let n = (j1 - j0 + 1) as usize;
         #[cfg(target_arch = "x86_64")]
-        if std::is_x86_feature_detected!("avx512f") {
+        if crate::simd::avx512f() {
             // SAFETY: the CPU has AVX-512 F; columns c0-1 ..= c0+n of the
             // three rows exist (1 <= c0, c0+n <= cols-1), and `s` has room
             // for the whole square.
@@ -220,7 +220,7 @@ fn collect_samples(img: &Plane, px: i64, py: i64, radius: i64, cos_t: f32, sin_t
 #[inline(always)]
 fn accumulate_simd_body(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HIST_LEN]) -> usize {
     #[cfg(target_arch = "x86_64")]
-    if std::is_x86_feature_detected!("avx512f") {
+    if crate::simd::avx512f() {
         // SAFETY: the CPU has AVX-512 F; all rows hold at least simd_len values.
         return unsafe { x86::accumulate(s, simd_len, ori, hist) };
     }

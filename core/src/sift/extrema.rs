@@ -104,7 +104,7 @@ fn difference(hi: &[f32], lo: &[f32], d: &mut [f32]) {
         unsafe fn avx2(hi: &[f32], lo: &[f32], d: &mut [f32]) {
             body(hi, lo, d)
         }
-        if std::is_x86_feature_detected!("avx2") {
+        if crate::simd::avx2() {
             // SAFETY: the CPU has AVX2, the only feature `avx2` enables.
             return unsafe { avx2(hi, lo, d) };
         }
@@ -354,9 +354,9 @@ fn row_extrema(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: 
     if rows.iter().all(|r| r.len() > cols.end) && cols.start >= 1 {
         // SAFETY (both calls): the CPU supports the features the function was
         // compiled for, and every row has a pixel on each side of `cols`.
-        let done = if std::is_x86_feature_detected!("avx512f") {
+        let done = if crate::simd::avx512f() {
             unsafe { x86::row_extrema_avx512(rows, thr, cols.clone(), out, &mut scratch.max, &mut scratch.min) }
-        } else if std::is_x86_feature_detected!("avx2") {
+        } else if crate::simd::avx2() {
             unsafe { x86::row_extrema_avx2(rows, thr, cols.clone(), out) }
         } else {
             cols.start

@@ -268,7 +268,7 @@ macro_rules! with_hw_fma {
             unsafe fn fast<F: FnOnce() -> $ret>(f: F) -> $ret {
                 f()
             }
-            if std::is_x86_feature_detected!("fma") && std::is_x86_feature_detected!("avx2") {
+            if $crate::simd::avx2_fma() {
                 // SAFETY: the CPU supports the features `fast` is compiled for.
                 unsafe { fast(|| $body) }
             } else {

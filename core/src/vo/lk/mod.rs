@@ -544,7 +544,7 @@ unsafe fn run_job_avx2(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut
 fn run_job(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
-        if !job.scalar && std::is_x86_feature_detected!("avx2") {
+        if !job.scalar && crate::simd::avx2() {
             // SAFETY: the CPU supports AVX2 (checked just above).
             unsafe { run_job_avx2(job, np, st, er) };
             return;

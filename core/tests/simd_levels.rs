@@ -1,0 +1,55 @@
+//! The kernels of every x86 SIMD level against OpenCV's goldens.
+//!
+//! An AVX-512 machine (this project's CI) only runs its AVX-512 kernels, but
+//! most students' laptops run the AVX2 ones, and a CPU without AVX2 the plain
+//! Rust ones. `siftlab_core::simd::set_cap` makes this machine run those
+//! instead; each level must give OpenCV's keypoints and descriptors bit for
+//! bit (`golden/noipp`, as `golden.rs` demands of the uncapped run).
+//!
+//! One test in its own binary: the cap is process-wide.
+
+#![cfg(all(not(target_arch = "wasm32"), target_arch = "x86_64"))]
+
+mod golden_data;
+mod json_mini;
+
+use std::fs;
+
+use golden_data::{fixtures, golden_frames, golden_params, parse_golden};
+use siftlab_core::sift::detect_and_compute;
+use siftlab_core::simd::{set_cap, SimdLevel};
+use siftlab_core::GrayImage;
+
+/// Keypoints and descriptors of frame `id` equal to the golden's, bit for bit;
+/// returns how many keypoints were compared.
+fn check_frame(level: SimdLevel, id: &str) -> usize {
+    let golden = fixtures().join(format!("golden/noipp/{id}.sift"));
+    let golden = parse_golden(&fs::read(&golden).unwrap(), &golden.display().to_string());
+    let frame = fixtures().join(format!("mykitti/gray/00/image_0/{id}.png"));
+    let img = GrayImage::decode(&fs::read(&frame).unwrap()).unwrap();
+    let ours = detect_and_compute(&img, &golden_params());
+    assert_eq!(ours.keypoints.len(), golden.keypoints.len(), "{level:?} {id}: keypoint count");
+    for (i, (a, b)) in ours.keypoints.iter().zip(&golden.keypoints).enumerate() {
+        let bits = |k: &siftlab_core::sift::KeyPoint| {
+            [k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits(), k.octave as u32]
+        };
+        assert_eq!(bits(a), bits(b), "{level:?} {id} keypoint {i}: ours {a:?}, OpenCV {b:?}");
+        assert_eq!(ours.descriptors[i], golden.descriptors[i], "{level:?} {id} descriptor {i}");
+    }
+    ours.keypoints.len()
+}
+
+#[test]
+fn every_simd_level_is_bit_exact_against_opencv() {
+    let frames = golden_frames("noipp");
+    // The plain-Rust level calls the library's fmaf for every FMA of the
+    // blur (about 1.3 s a frame, against 0.1 s with AVX2).
+    for level in [SimdLevel::Avx2, SimdLevel::Scalar] {
+        let n = frames.len();
+        set_cap(level);
+        let total: usize = frames.iter().take(n).map(|id| check_frame(level, id)).sum();
+        eprintln!("{level:?}: {total} keypoints on {n} frames, keypoints and descriptors bit-exact");
+        assert!(total > 0);
+    }
+    set_cap(SimdLevel::Avx512);
+}
