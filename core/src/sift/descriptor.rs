@@ -184,17 +184,21 @@ fn collect_samples(img: &Plane, px: i64, py: i64, radius: i64, cos_t: f32, sin_t
         let (row, up, down) = (img.row(r), img.row(r - 1), img.row(r + 1));
         let c0 = (px + j0) as usize;
         let n = (j1 - j0 + 1) as usize;
+        // SAFETY (both x86 calls): the CPU has the features the kernel is
+        // compiled for; columns c0-1 ..= c0+n of the three rows exist
+        // (1 <= c0, c0+n <= cols-1), and `s` has room for the whole square.
         #[cfg(target_arch = "x86_64")]
-        if crate::simd::avx512f() {
-            // SAFETY: the CPU has AVX-512 F; columns c0-1 ..= c0+n of the
-            // three rows exist (1 <= c0, c0+n <= cols-1), and `s` has room
-            // for the whole square.
+        let done = if crate::simd::avx512f() {
             unsafe { x86::sample_row(&mut s, [row, up, down], c0, n, j0 as f32, [cos_t, sin_t, a, b], exp_scale) };
             continue;
-        }
+        } else if crate::simd::avx2_fma() {
+            unsafe { x86::sample_row_avx2(&mut s, [row, up, down], c0, n, j0 as f32, [cos_t, sin_t, a, b], exp_scale) }
+        } else {
+            0
+        };
         #[cfg(target_arch = "wasm32")]
         let done = wasm::sample_row(&mut s, [row, up, down], c0, n, j0 as f32, [cos_t, sin_t, a, b], exp_scale);
-        #[cfg(not(target_arch = "wasm32"))]
+        #[cfg(not(any(target_arch = "x86_64", target_arch = "wasm32")))]
         let done = 0;
         for t in done..n {
             let fj = (j0 + t as i64) as f32;
@@ -220,9 +224,15 @@ fn collect_samples(img: &Plane, px: i64, py: i64, radius: i64, cos_t: f32, sin_t
 #[inline(always)]
 fn accumulate_simd_body(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HIST_LEN]) -> usize {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx512f() {
-        // SAFETY: the CPU has AVX-512 F; all rows hold at least simd_len values.
-        return unsafe { x86::accumulate(s, simd_len, ori, hist) };
+    {
+        // SAFETY (both): the CPU has the features the kernel is compiled
+        // for; all rows hold at least simd_len values.
+        if crate::simd::avx512f() {
+            return unsafe { x86::accumulate(s, simd_len, ori, hist) };
+        }
+        if crate::simd::avx2() {
+            return unsafe { x86::accumulate_avx2(s, simd_len, ori, hist) };
+        }
     }
     #[cfg(target_arch = "wasm32")]
     return wasm::accumulate(s, simd_len, ori, hist);
@@ -349,6 +359,133 @@ mod x86 {
                 }
             }
             k += count;
+        }
+        k
+    }
+
+    /// For each 8-bit mask of kept lanes, the lanes to move to the front (in
+    /// order): AVX2 has no compress-store, `vpermps` by this table does it.
+    static COMPRESS: [[u32; 8]; 256] = {
+        let mut t = [[0u32; 8]; 256];
+        let mut m = 0;
+        while m < 256 {
+            let (mut k, mut l) = (0, 0);
+            while l < 8 {
+                if m & (1 << l) != 0 {
+                    t[m][k] = l as u32;
+                    k += 1;
+                }
+                l += 1;
+            }
+            m += 1;
+        }
+        t
+    };
+
+    /// [`sample_row`] for AVX2, 8 columns at a time: the kept lanes are
+    /// moved to the front by [`COMPRESS`] and stored with a mask of as many
+    /// lanes, so the order is the scalar loop's. Only whole blocks of 8; the
+    /// scalar loop does the rest. Returns the columns examined.
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn sample_row_avx2(
+        s: &mut Samples,
+        [row, up, down]: [&[f32]; 3],
+        c0: usize,
+        n: usize,
+        j0: f32,
+        [cos_t, sin_t, a, b]: [f32; 4],
+        exp_scale: f32,
+    ) -> usize {
+        let lane = _mm256_setr_ps(0., 1., 2., 3., 4., 5., 6., 7.);
+        let lane_i = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+        let (cos_v, sin_v, a_v, b_v) = (_mm256_set1_ps(cos_t), _mm256_set1_ps(sin_t), _mm256_set1_ps(a), _mm256_set1_ps(b));
+        let (half, point5, lo, hi) = (_mm256_set1_ps(D as f32 / 2.0), _mm256_set1_ps(0.5), _mm256_set1_ps(-1.0), _mm256_set1_ps(D as f32));
+        let mut t = 0;
+        while t + 8 <= n {
+            let fj = _mm256_add_ps(_mm256_set1_ps(j0 + t as f32), lane);
+            let c_rot = _mm256_fmadd_ps(fj, cos_v, a_v);
+            let r_rot = _mm256_fmadd_ps(fj, sin_v, b_v);
+            let rbin = _mm256_sub_ps(_mm256_add_ps(r_rot, half), point5);
+            let cbin = _mm256_sub_ps(_mm256_add_ps(c_rot, half), point5);
+            let keep = _mm256_and_ps(
+                _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(rbin, lo), _mm256_cmp_ps::<_CMP_LT_OQ>(rbin, hi)),
+                _mm256_and_ps(_mm256_cmp_ps::<_CMP_GT_OQ>(cbin, lo), _mm256_cmp_ps::<_CMP_LT_OQ>(cbin, hi)),
+            );
+            let m = _mm256_movemask_ps(keep) as usize;
+            if m != 0 {
+                let c = c0 + t;
+                let dx = _mm256_sub_ps(_mm256_loadu_ps(row.as_ptr().add(c + 1)), _mm256_loadu_ps(row.as_ptr().add(c - 1)));
+                let dy = _mm256_sub_ps(_mm256_loadu_ps(up.as_ptr().add(c)), _mm256_loadu_ps(down.as_ptr().add(c)));
+                let w = _mm256_mul_ps(_mm256_fmadd_ps(c_rot, c_rot, _mm256_mul_ps(r_rot, r_rot)), _mm256_set1_ps(exp_scale));
+                let perm = _mm256_loadu_si256(COMPRESS[m].as_ptr().cast());
+                let k = m.count_ones() as usize;
+                let first_k = _mm256_cmpgt_epi32(_mm256_set1_epi32(k as i32), lane_i);
+                let len = s.dx.len();
+                for (v, x) in [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)] {
+                    debug_assert!(v.capacity() >= len + k);
+                    _mm256_maskstore_ps(v.as_mut_ptr().add(len), first_k, _mm256_permutevar8x32_ps(x, perm));
+                    v.set_len(len + k);
+                }
+            }
+            t += 8;
+        }
+        t
+    }
+
+    /// [`accumulate`] for AVX2, 8 samples a step (whole blocks only; the
+    /// caller does the rest of the SIMD body with the same operations).
+    #[target_feature(enable = "avx2")]
+    pub unsafe fn accumulate_avx2(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HIST_LEN]) -> usize {
+        let (ori_v, bpd) = (_mm256_set1_ps(ori), _mm256_set1_ps(BINS_PER_DEG));
+        let (zero, n_v) = (_mm256_setzero_si256(), _mm256_set1_epi32(N as i32));
+        let floor_i = |v: __m256| _mm256_cvttps_epi32(_mm256_floor_ps(v));
+        let offs = cell_offsets();
+        let mut k = 0;
+        while k + 8 <= simd_len {
+            let load = |v: &[f32]| _mm256_loadu_ps(v[k..k + 8].as_ptr());
+            let (mut rbin, mut cbin) = (load(s.rbin), load(s.cbin));
+            let mut obin = _mm256_mul_ps(_mm256_sub_ps(load(s.ori), ori_v), bpd);
+            let mag = _mm256_mul_ps(load(s.mag), load(s.wt));
+            let (r0, c0, mut o0) = (floor_i(rbin), floor_i(cbin), floor_i(obin));
+            rbin = _mm256_sub_ps(rbin, _mm256_cvtepi32_ps(r0));
+            cbin = _mm256_sub_ps(cbin, _mm256_cvtepi32_ps(c0));
+            obin = _mm256_sub_ps(obin, _mm256_cvtepi32_ps(o0));
+            o0 = _mm256_add_epi32(o0, _mm256_and_si256(_mm256_cmpgt_epi32(zero, o0), n_v));
+            o0 = _mm256_sub_epi32(o0, _mm256_andnot_si256(_mm256_cmpgt_epi32(n_v, o0), n_v));
+            let v_r1 = _mm256_mul_ps(mag, rbin);
+            let v_r0 = _mm256_sub_ps(mag, v_r1);
+            let v_rc11 = _mm256_mul_ps(v_r1, cbin);
+            let v_rc10 = _mm256_sub_ps(v_r1, v_rc11);
+            let v_rc01 = _mm256_mul_ps(v_r0, cbin);
+            let v_rc00 = _mm256_sub_ps(v_r0, v_rc01);
+            let idx = _mm256_add_epi32(
+                _mm256_mullo_epi32(
+                    _mm256_add_epi32(
+                        _mm256_mullo_epi32(_mm256_add_epi32(r0, _mm256_set1_epi32(1)), _mm256_set1_epi32(D as i32 + 2)),
+                        _mm256_add_epi32(c0, _mm256_set1_epi32(1)),
+                    ),
+                    _mm256_set1_epi32(N as i32 + 2),
+                ),
+                o0,
+            );
+            let mut idx_a = [0i32; 8];
+            _mm256_storeu_si256(idx_a.as_mut_ptr().cast(), idx);
+            let mut w = [[0f32; 8]; 8];
+            for (c, rc) in [v_rc00, v_rc01, v_rc10, v_rc11].into_iter().enumerate() {
+                let rco1 = _mm256_mul_ps(rc, obin);
+                _mm256_storeu_ps(w[2 * c].as_mut_ptr(), _mm256_sub_ps(rc, rco1));
+                _mm256_storeu_ps(w[2 * c + 1].as_mut_ptr(), rco1);
+            }
+            for (l, &idx) in idx_a.iter().enumerate() {
+                // As in `accumulate`: idx is in 0..=287; the clamp removes
+                // the bounds checks.
+                let idx = idx.clamp(0, 287) as usize;
+                for (c, off) in offs.into_iter().enumerate() {
+                    hist[idx + off] += w[2 * c][l];
+                    hist[idx + off + 1] += w[2 * c + 1][l];
+                }
+            }
+            k += 8;
         }
         k
     }
