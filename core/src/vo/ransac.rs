@@ -71,19 +71,68 @@ pub fn update_num_iters(p: f64, ep: f64, model_points: i32, max_iters: usize) ->
     }
 }
 
+/// The correspondences as four coordinate columns, so that the Sampson
+/// error of a model runs over them in vectors: every lane does OpenCV's
+/// scalar operations in its order (Rust never fuses a multiply and an add).
+struct Columns {
+    x1: Vec<f64>,
+    y1: Vec<f64>,
+    x2: Vec<f64>,
+    y2: Vec<f64>,
+}
+
+impl Columns {
+    fn new(p1: &[[f64; 2]], p2: &[[f64; 2]]) -> Self {
+        Columns {
+            x1: p1.iter().map(|p| p[0]).collect(),
+            y1: p1.iter().map(|p| p[1]).collect(),
+            x2: p2.iter().map(|p| p[0]).collect(),
+            y2: p2.iter().map(|p| p[1]).collect(),
+        }
+    }
+}
+
 /// Squared Sampson distance of every correspondence, f64 rounded to f32
-/// (`EMEstimatorCallback::computeError`, baseline code: no FMA).
-pub fn sampson_errors(e: &Mat3, p1: &[[f64; 2]], p2: &[[f64; 2]], out: &mut Vec<f32>) {
-    out.clear();
-    out.extend(p1.iter().zip(p2).map(|(a, b)| {
-        let (x1, y1) = (a[0], a[1]);
-        let (x2, y2) = (b[0], b[1]);
-        let ex1: [f64; 3] = std::array::from_fn(|r| (e[r][0] * x1 + e[r][1] * y1) + e[r][2]);
-        let etx2: [f64; 3] = std::array::from_fn(|c| (e[0][c] * x2 + e[1][c] * y2) + e[2][c]);
-        let r = (x2 * ex1[0] + y2 * ex1[1]) + ex1[2];
-        let den = ((ex1[0] * ex1[0] + ex1[1] * ex1[1]) + etx2[0] * etx2[0]) + etx2[1] * etx2[1];
-        (r * r / den) as f32
-    }));
+/// (`EMEstimatorCallback::computeError`, baseline code: no FMA), into `err`;
+/// returns how many are at most `t` (`findInliers`).
+fn sampson_errors(e: &Mat3, pts: &Columns, t: f32, err: &mut Vec<f32>) -> usize {
+    #[inline(always)]
+    fn body(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
+        let n = err.len();
+        let (x1, y1, x2, y2) = (&pts.x1[..n], &pts.y1[..n], &pts.x2[..n], &pts.y2[..n]);
+        let mut good = 0;
+        for i in 0..n {
+            let ex1: [f64; 3] = std::array::from_fn(|r| (e[r][0] * x1[i] + e[r][1] * y1[i]) + e[r][2]);
+            let etx2: [f64; 3] = std::array::from_fn(|c| (e[0][c] * x2[i] + e[1][c] * y2[i]) + e[2][c]);
+            let r = (x2[i] * ex1[0] + y2[i] * ex1[1]) + ex1[2];
+            let den = ((ex1[0] * ex1[0] + ex1[1] * ex1[1]) + etx2[0] * etx2[0]) + etx2[1] * etx2[1];
+            let v = (r * r / den) as f32;
+            err[i] = v;
+            good += (v <= t) as usize;
+        }
+        good
+    }
+    err.clear();
+    err.resize(pts.x1.len(), 0.0);
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx512f")]
+        unsafe fn avx512(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
+            body(e, pts, t, err)
+        }
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx2(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
+            body(e, pts, t, err)
+        }
+        // SAFETY (both): the CPU has the one feature the function enables.
+        if crate::simd::avx512f() {
+            return unsafe { avx512(e, pts, t, err) };
+        }
+        if crate::simd::avx2() {
+            return unsafe { avx2(e, pts, t, err) };
+        }
+    }
+    body(e, pts, t, err)
 }
 
 /// findEssentialMat on already normalized coordinates; `thr` is the
@@ -112,6 +161,7 @@ pub fn ransac_normalized(p1: &[[f64; 2]], p2: &[[f64; 2]], thr: f64, prob: f64, 
         return Ok(EssentialResult { models, mask: vec![true; 5], inliers: 5, iterations: 1 });
     }
     let t = (thr * thr) as f32;
+    let pts = Columns::new(p1, p2);
     let mut rng = CvRng::new(u64::MAX);
     let mut niters = max_iters;
     let mut max_good = 0usize;
@@ -131,8 +181,7 @@ pub fn ransac_normalized(p1: &[[f64; 2]], p2: &[[f64; 2]], thr: f64, prob: f64, 
             }
         }
         for model in sample(&idx) {
-            sampson_errors(&model, p1, p2, &mut err);
-            let good = err.iter().filter(|&&e| e <= t).count();
+            let good = sampson_errors(&model, &pts, t, &mut err);
             // Strictly more than the best so far and than modelPoints − 1.
             if good > max_good.max(4) {
                 best = Some(model);
