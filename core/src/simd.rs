@@ -57,6 +57,13 @@ pub(crate) fn avx512f() -> bool {
     cap() >= SimdLevel::Avx512 && std::is_x86_feature_detected!("avx512f")
 }
 
+/// AVX-512 BW kernels (16-bit lanes) may run.
+#[cfg(target_arch = "x86_64")]
+#[inline]
+pub(crate) fn avx512bw() -> bool {
+    avx512f() && std::is_x86_feature_detected!("avx512bw")
+}
+
 /// AVX-512 F kernels compiled with FMA may run.
 #[cfg(target_arch = "x86_64")]
 #[inline]

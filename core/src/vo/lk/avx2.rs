@@ -316,6 +316,112 @@ unsafe fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) 
     wide::abs_diff_total(&total.acc())
 }
 
+/// The mismatch with AVX-512 BW: a whole window row (block part, tail and
+/// the zero padding of `Row`) is one 32-lane vector, each 128-bit chunk
+/// doing what the AVX2 kernel's ymm and xmm halves do in that chunk: the
+/// same products, pair sums and packs, so the same integers.
+pub struct Avx512;
+
+/// `pairs_u8` as one vector: chunks 0–1 the block pairs, chunk 2 the tail
+/// pairs, chunk 3 zero (reads `p[0..32]`).
+#[target_feature(enable = "avx512bw,avx512f,avx2")]
+#[inline]
+unsafe fn pairs_u8_512(p: *const u8) -> (__m512i, __m512i) {
+    const Z: i8 = -128;
+    let lo = _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i);
+    let hi = _mm256_castsi128_si256(_mm_loadu_si128(p.add(16) as *const __m128i));
+    let src = _mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi);
+    #[rustfmt::skip]
+    let ma = _mm512_set_epi8(
+        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z,
+        Z, 4, Z, 3, Z, 3, Z, 2, Z, 2, Z, 1, Z, 1, Z, 0,
+        Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0,
+        Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0);
+    #[rustfmt::skip]
+    let mb = _mm512_set_epi8(
+        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z,
+        Z, 8, Z, 7, Z, 7, Z, 6, Z, 6, Z, 5, Z, 5, Z, 4,
+        Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2,
+        Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2);
+    (_mm512_shuffle_epi8(src, ma), _mm512_shuffle_epi8(src, mb))
+}
+
+#[target_feature(enable = "avx512bw,avx512f,avx2")]
+#[inline]
+unsafe fn mix_512<const S: u32>(t: __m512i, b: __m512i, wt: __m512i, wb: __m512i) -> __m512i {
+    let v = _mm512_add_epi32(_mm512_madd_epi16(t, wt), _mm512_madd_epi16(b, wb));
+    _mm512_srai_epi32::<S>(_mm512_add_epi32(v, _mm512_set1_epi32(1i32 << (S - 1))))
+}
+
+/// Splits an i32 sum vector into `Acc`: lanes 0–7 the blocks, 8–11 the tail.
+#[target_feature(enable = "avx512bw,avx512f,avx2")]
+#[inline]
+unsafe fn acc_512(v: __m512i) -> Acc {
+    let mut lanes = [0i32; 16];
+    _mm512_storeu_si512(lanes.as_mut_ptr() as *mut _, v);
+    let mut a = Acc::default();
+    a.blocks.copy_from_slice(&lanes[..8]);
+    a.tail.copy_from_slice(&lanes[8..12]);
+    a
+}
+
+#[target_feature(enable = "avx512bw,avx512f,avx2")]
+unsafe fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+    let base = next.offset(jx, jy);
+    assert!(base + WIN * next.stride + 32 <= next.padded.len());
+    let src = next.padded[base..].as_ptr();
+    let stride = next.stride;
+    let wt = _mm512_set1_epi32((w[1] << 16) | (w[0] & 0xffff));
+    let wb = _mm512_set1_epi32((w[3] << 16) | (w[2] & 0xffff));
+    let row = |r: &Row| _mm512_loadu_si512(r.0.as_ptr() as *const _);
+    let zero = _mm512_setzero_si512();
+    let (mut sx, mut sy, mut bx, mut by) = (zero, zero, zero, zero);
+    let mut top = pairs_u8_512(src);
+    for y in 0..WIN {
+        let bot = pairs_u8_512(src.add((y + 1) * stride));
+        // Chunk 3 mixes zeros: (0 + 2^8) >> 9 = 0, so the padding stays 0.
+        let j = _mm512_packs_epi32(mix_512::<9>(top.0, bot.0, wt, wb), mix_512::<9>(top.1, bot.1, wt, wb));
+        top = bot;
+        let d = _mm512_sub_epi16(j, row(&p.t[y]));
+        _mm512_storeu_si512(p.d[y].0.as_mut_ptr() as *mut _, d);
+        sx = _mm512_add_epi32(sx, _mm512_madd_epi16(d, row(&p.x[y])));
+        sy = _mm512_add_epi32(sy, _mm512_madd_epi16(d, row(&p.y[y])));
+        let ad = _mm512_abs_epi16(d);
+        bx = _mm512_add_epi32(bx, _mm512_madd_epi16(ad, row(&p.ax[y])));
+        by = _mm512_add_epi32(by, _mm512_madd_epi16(ad, row(&p.ay[y])));
+    }
+    let (sx, sy, bx, by) = (acc_512(sx), acc_512(sy), acc_512(bx), acc_512(by));
+    // SAFETY (the closure): AVX2 is enabled in this function.
+    wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| unsafe { mismatch_lanes_replay(p) })
+}
+
+impl Kernels for Avx512 {
+    type Patch = Patch;
+
+    fn new_patch() -> Box<Patch> {
+        Patch::new_boxed()
+    }
+
+    #[inline(always)]
+    fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
+        // SAFETY: only reached on AVX-512 BW CPUs (run_job checks), which have AVX2.
+        unsafe { load_patch(prev, deriv, ix, iy, w, p) }
+    }
+
+    #[inline(always)]
+    fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+        // SAFETY: as above; every load is inside the padded planes (asserted)
+        // or a whole `Row`.
+        unsafe { mismatch_512(next, jx, jy, w, p) }
+    }
+
+    #[inline(always)]
+    fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> f32 {
+        // SAFETY: as above.
+        unsafe { abs_diff_sum(next, jx, jy, w, p) }
+    }
+}
+
 impl Kernels for Avx2 {
     type Patch = Patch;
 
@@ -401,7 +507,8 @@ mod tests {
             let prev = level(w, h, noise, 1 + noise as u64);
             let next = level(w, h, noise, 7 + noise as u64);
             let deriv = Deriv::new(&prev);
-            let (mut sp, mut vp) = (Scalar::new_patch(), Avx2::new_patch());
+            let (mut sp, mut vp, mut zp) = (Scalar::new_patch(), Avx2::new_patch(), Avx512::new_patch());
+            let avx512 = std::is_x86_feature_detected!("avx512bw");
             for _ in 0..cases {
                 let mut coord = |n: usize| (rnd() % (n as u64 + 21)) as i32 - 21;
                 let (ix, iy, jx, jy) = (coord(w), coord(h), coord(w), coord(h));
@@ -422,6 +529,16 @@ mod tests {
                     [b.0.to_bits(), b.1.to_bits()],
                     "mismatch ({ix}, {iy}) → ({jx}, {jy}), noise {noise}"
                 );
+                if avx512 {
+                    Avx512::load_patch(&prev, &deriv, ix, iy, &w0, &mut zp);
+                    let c = Avx512::mismatch(&next, jx, jy, &w1, &mut zp);
+                    assert_eq!(
+                        [a.0.to_bits(), a.1.to_bits()],
+                        [c.0.to_bits(), c.1.to_bits()],
+                        "AVX-512 mismatch ({ix}, {iy}) → ({jx}, {jy}), noise {noise}"
+                    );
+                    assert!(vp.d.iter().zip(zp.d.iter()).all(|(u, v)| u.0[..24] == v.0[..24]), "J − T rows");
+                }
                 // The portable replay of OpenCV's lane order (what wasm
                 // uses) against this module's vector one, on this J − T.
                 // SAFETY: AVX2 checked at the top.

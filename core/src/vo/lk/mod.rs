@@ -541,9 +541,21 @@ unsafe fn run_job_avx2(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut
     run_job_body::<avx2::Avx2>(job, np, st, er)
 }
 
+/// The same loop around the AVX-512 BW mismatch kernel.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512bw,avx512f,avx2")]
+unsafe fn run_job_avx512(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
+    run_job_body::<avx2::Avx512>(job, np, st, er)
+}
+
 fn run_job(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
+        if !job.scalar && crate::simd::avx512bw() {
+            // SAFETY: the CPU supports AVX-512 F and BW (checked just above).
+            unsafe { run_job_avx512(job, np, st, er) };
+            return;
+        }
         if !job.scalar && crate::simd::avx2() {
             // SAFETY: the CPU supports AVX2 (checked just above).
             unsafe { run_job_avx2(job, np, st, er) };
