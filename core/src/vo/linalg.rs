@@ -341,8 +341,9 @@ pub fn solve_poly(c: &[f64], max_iters: usize) -> Vec<Complex> {
 /// 15 to 50). A sweep is a function of the roots alone, so once a state
 /// repeats, every later state is known: with `skip_cycles` the roots after
 /// `max_iters` sweeps are read from the cycle instead of computed — OpenCV's
-/// roots, bit for bit, for about a tenth of the work (the 300 sweeps were
-/// 85 % of findEssentialMat). Returns the roots and the sweeps computed.
+/// roots, bit for bit (the 300 sweeps were 85 % of findEssentialMat). Some
+/// polynomials never repeat within 300 sweeps (their last bits wander) and
+/// still take all of them. Returns the roots and the sweeps computed.
 fn durand_kerner(c: &[f64], max_iters: usize, skip_cycles: bool) -> (Vec<Complex>, usize) {
     let n0 = c.len().saturating_sub(1);
     let coeffs: Vec<Complex> = c.iter().map(|&v| Complex::new(v, 0.0)).collect();
