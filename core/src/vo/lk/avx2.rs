@@ -402,23 +402,22 @@ impl Kernels for Avx512 {
         Patch::new_boxed()
     }
 
+    // Only the mismatch differs from the AVX2 kernels (an AVX-512 BW CPU has AVX2).
     #[inline(always)]
     fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
-        // SAFETY: only reached on AVX-512 BW CPUs (run_job checks), which have AVX2.
-        unsafe { load_patch(prev, deriv, ix, iy, w, p) }
+        Avx2::load_patch(prev, deriv, ix, iy, w, p)
     }
 
     #[inline(always)]
     fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
-        // SAFETY: as above; every load is inside the padded planes (asserted)
-        // or a whole `Row`.
+        // SAFETY: only reached on AVX-512 BW CPUs (run_job checks); every
+        // load is inside the padded planes (asserted) or a whole `Row`.
         unsafe { mismatch_512(next, jx, jy, w, p) }
     }
 
     #[inline(always)]
     fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> f32 {
-        // SAFETY: as above.
-        unsafe { abs_diff_sum(next, jx, jy, w, p) }
+        Avx2::abs_diff_sum(next, jx, jy, w, p)
     }
 }
 
