@@ -3,7 +3,10 @@
 
 #![cfg(not(target_arch = "wasm32"))]
 
+mod golden_data;
 mod json_mini;
+
+use golden_data::{fixtures, golden_lanes, golden_sets};
 
 use siftlab_core::matching::{match_feature, matching_info, Strategy};
 use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
@@ -13,24 +16,12 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-fn fixtures() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures")
-}
-
 fn dataset() -> PathBuf {
     fixtures().join("mykitti")
 }
 
 fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
-
-/// The SIMD width OpenCV's SIFT kernels ran with where the goldens were written
-/// (spec §13), from `golden/meta.json`; the CLI would otherwise follow the host's CPU.
-fn golden_lanes() -> usize {
-    let meta = fs::read_to_string(fixtures().join("golden/meta.json")).expect("golden/meta.json");
-    let meta = json_mini::parse(&meta).expect("meta.json is JSON");
-    meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("meta.json: opencv_simd_lanes") as usize
 }
 
 fn golden_lanes_args() -> [String; 2] {
@@ -180,38 +171,39 @@ fn first_golden_frame() -> String {
     ids.into_iter().next().expect("no noipp goldens")
 }
 
+/// The fixture frame where OpenCV's two SIMD widths disagree (one descriptor
+/// row of `golden` and `golden-avx2` differs by 1), so `--opencv-lanes` is seen.
+const WIDTH_FRAME: &str = "000002";
+
 #[test]
 fn sift_json_round_trips_opencv_values_bit_exactly() {
-    let id = first_golden_frame();
-    let frame = dataset().join(format!("gray/00/image_0/{id}.png"));
-    let lanes = golden_lanes().to_string();
-    let o = siftlab(&["--opencv-lanes", &lanes, "sift", frame.to_str().unwrap(), "--json"]);
-    assert!(o.status.success(), "sift --json failed: {}", stderr(&o));
-    let doc = json_mini::parse(stdout(&o).trim()).expect("sift --json is not valid JSON");
-
-    let golden = fs::read(fixtures().join(format!("golden/noipp/{id}.sift"))).unwrap();
-    let u32_at = |o: usize| u32::from_le_bytes(golden[o..o + 4].try_into().unwrap());
-    let f32_at = |o: usize| f32::from_le_bytes(golden[o..o + 4].try_into().unwrap());
-    let n = u32_at(16) as usize;
-    assert_eq!(doc.get("width").and_then(|v| v.i64()), Some(u32_at(8) as i64));
-    assert_eq!(doc.get("height").and_then(|v| v.i64()), Some(u32_at(12) as i64));
-    let kps = doc.get("keypoints").and_then(|v| v.arr()).expect("keypoints array");
-    let descs = doc.get("descriptors").and_then(|v| v.arr()).expect("descriptors array");
-    assert_eq!((kps.len(), descs.len()), (n, n), "keypoint/descriptor counts");
-    for (i, kp) in kps.iter().enumerate() {
-        let o = 20 + i * 24;
-        for (j, key) in ["x", "y", "size", "angle", "response"].iter().enumerate() {
-            let got = kp.get(key).and_then(|v| v.f32()).unwrap_or_else(|| panic!("kp {i} {key}"));
-            let want = f32_at(o + 4 * j);
-            assert_eq!(got.to_bits(), want.to_bits(), "{id} kp {i} {key}: {got:?} vs OpenCV {want:?}");
+    let frame = dataset().join(format!("gray/00/image_0/{WIDTH_FRAME}.png"));
+    for set in golden_sets() {
+        let lanes = set.lanes.to_string();
+        let o = siftlab(&["--opencv-lanes", &lanes, "sift", frame.to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "sift --json failed: {}", stderr(&o));
+        let doc = json_mini::parse(stdout(&o).trim()).expect("sift --json is not valid JSON");
+        let golden = set.read("noipp", WIDTH_FRAME);
+        let id = format!("{} {WIDTH_FRAME}", set.name);
+        assert_eq!(doc.get("width").and_then(|v| v.i64()), Some(golden.width as i64));
+        assert_eq!(doc.get("height").and_then(|v| v.i64()), Some(golden.height as i64));
+        let kps = doc.get("keypoints").and_then(|v| v.arr()).expect("keypoints array");
+        let descs = doc.get("descriptors").and_then(|v| v.arr()).expect("descriptors array");
+        let n = golden.keypoints.len();
+        assert_eq!((kps.len(), descs.len()), (n, n), "{id}: keypoint/descriptor counts");
+        for (i, (kp, want)) in kps.iter().zip(&golden.keypoints).enumerate() {
+            let fields = [("x", want.x), ("y", want.y), ("size", want.size), ("angle", want.angle), ("response", want.response)];
+            for (key, want) in fields {
+                let got = kp.get(key).and_then(|v| v.f32()).unwrap_or_else(|| panic!("kp {i} {key}"));
+                assert_eq!(got.to_bits(), want.to_bits(), "{id} kp {i} {key}: {got:?} vs OpenCV {want:?}");
+            }
+            assert_eq!(kp.get("octave").and_then(|v| v.i64()), Some(want.octave as i64), "{id} kp {i} octave");
         }
-        assert_eq!(kp.get("octave").and_then(|v| v.i64()), Some(u32_at(o + 20) as i32 as i64), "kp {i} octave");
-    }
-    let dbase = 20 + n * 24;
-    for (i, d) in descs.iter().enumerate() {
-        let got: Vec<i64> = d.arr().expect("descriptor row").iter().map(|v| v.i64().unwrap()).collect();
-        let want: Vec<i64> = golden[dbase + 128 * i..dbase + 128 * (i + 1)].iter().map(|&b| b as i64).collect();
-        assert_eq!(got, want, "{id} descriptor {i}");
+        for (i, (d, want)) in descs.iter().zip(&golden.descriptors).enumerate() {
+            let got: Vec<i64> = d.arr().expect("descriptor row").iter().map(|v| v.i64().unwrap()).collect();
+            let want: Vec<i64> = want.iter().map(|&b| b as i64).collect();
+            assert_eq!(got, want, "{id} descriptor {i} at {lanes} lanes");
+        }
     }
 }
 

@@ -1,10 +1,12 @@
 //! The kernels of every x86 SIMD level against OpenCV's goldens.
 //!
-//! An AVX-512 machine (this project's CI) only runs its AVX-512 kernels, but
-//! most students' laptops run the AVX2 ones, and a CPU without AVX2 the plain
-//! Rust ones. `siftlab_core::simd::set_cap` makes this machine run those
-//! instead; each level must give OpenCV's keypoints and descriptors bit for
-//! bit (`golden/noipp`, as `golden.rs` demands of the uncapped run).
+//! A machine with AVX-512 only runs its AVX-512 kernels, but most students'
+//! laptops run the AVX2 ones, and a CPU without AVX2 the plain Rust ones.
+//! `siftlab_core::simd::set_cap` makes this machine run those instead; each
+//! level must give OpenCV's keypoints and descriptors bit for bit (the `noipp`
+//! goldens, as `golden.rs` demands of the uncapped run): the AVX2 kernels on
+//! both golden sets (OpenCV at 16 and at 8 lanes), the plain ones on the
+//! primary set.
 //!
 //! One test in its own binary: the cap is process-wide.
 
@@ -15,40 +17,45 @@ mod json_mini;
 
 use std::fs;
 
-use golden_data::{fixtures, golden_frames, golden_params, parse_golden};
+use golden_data::{fixtures, golden_sets, primary_set, set_frames, GoldenSet};
 use siftlab_core::sift::detect_and_compute;
 use siftlab_core::simd::{set_cap, SimdLevel};
 use siftlab_core::GrayImage;
 
 /// Keypoints and descriptors of frame `id` equal to the golden's, bit for bit;
 /// returns how many keypoints were compared.
-fn check_frame(level: SimdLevel, id: &str) -> usize {
-    let golden = fixtures().join(format!("golden/noipp/{id}.sift"));
-    let golden = parse_golden(&fs::read(&golden).unwrap(), &golden.display().to_string());
+fn check_frame(level: SimdLevel, set: &GoldenSet, id: &str) -> usize {
+    let golden = set.read("noipp", id);
     let frame = fixtures().join(format!("mykitti/gray/00/image_0/{id}.png"));
     let img = GrayImage::decode(&fs::read(&frame).unwrap()).unwrap();
-    let ours = detect_and_compute(&img, &golden_params());
-    assert_eq!(ours.keypoints.len(), golden.keypoints.len(), "{level:?} {id}: keypoint count");
+    let ours = detect_and_compute(&img, &set.params());
+    let name = set.name;
+    assert_eq!(ours.keypoints.len(), golden.keypoints.len(), "{level:?} {name} {id}: keypoint count");
     for (i, (a, b)) in ours.keypoints.iter().zip(&golden.keypoints).enumerate() {
         let bits = |k: &siftlab_core::sift::KeyPoint| {
             [k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits(), k.octave as u32]
         };
-        assert_eq!(bits(a), bits(b), "{level:?} {id} keypoint {i}: ours {a:?}, OpenCV {b:?}");
-        assert_eq!(ours.descriptors[i], golden.descriptors[i], "{level:?} {id} descriptor {i}");
+        assert_eq!(bits(a), bits(b), "{level:?} {name} {id} keypoint {i}: ours {a:?}, OpenCV {b:?}");
+        assert_eq!(ours.descriptors[i], golden.descriptors[i], "{level:?} {name} {id} descriptor {i}");
     }
     ours.keypoints.len()
 }
 
 #[test]
 fn every_simd_level_is_bit_exact_against_opencv() {
-    let frames = golden_frames("noipp");
     // The plain-Rust level calls the library's fmaf for every FMA of the
-    // blur (about 1.3 s a frame, against 0.1 s with AVX2).
-    for level in [SimdLevel::Avx2, SimdLevel::Scalar] {
-        let n = frames.len();
+    // blur (about 1.3 s a frame, against 0.1 s with AVX2): one set only.
+    let runs = golden_sets().into_iter().map(|set| (SimdLevel::Avx2, set)).chain([(SimdLevel::Scalar, primary_set())]);
+    for (level, set) in runs {
+        let frames = set_frames(&set, "noipp");
         set_cap(level);
-        let total: usize = frames.iter().take(n).map(|id| check_frame(level, id)).sum();
-        eprintln!("{level:?}: {total} keypoints on {n} frames, keypoints and descriptors bit-exact");
+        let total: usize = frames.iter().map(|id| check_frame(level, &set, id)).sum();
+        eprintln!(
+            "{level:?}, {} ({} lanes): {total} keypoints on {} frames, keypoints and descriptors bit-exact",
+            set.name,
+            set.lanes,
+            frames.len()
+        );
         assert!(total > 0);
     }
     set_cap(SimdLevel::Avx512);

@@ -35,10 +35,21 @@ const IPP0: &[u8] = include_bytes!("../../tests/fixtures/golden/ipp/000000.sift"
 const IPP1: &[u8] = include_bytes!("../../tests/fixtures/golden/ipp/000001.sift");
 const GET_INFO: &str = include_str!("../../tests/fixtures/golden/get_info.jsonl");
 const META: &str = include_str!("../../tests/fixtures/golden/meta.json");
+/// Frame 2 is where OpenCV's two SIMD widths disagree on the fixtures (one
+/// descriptor row): the primary goldens ran 16 lanes wide, `golden-avx2` 8,
+/// the app's default width.
+const FRAME2: &[u8] = include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000002.png");
+const GOLDEN2: &[u8] = include_bytes!("../../tests/fixtures/golden/noipp/000002.sift");
+const GOLDEN2_AVX2: &[u8] = include_bytes!("../../tests/fixtures/golden-avx2/noipp/000002.sift");
+const META_AVX2: &str = include_str!("../../tests/fixtures/golden-avx2/meta.json");
 
 /// The SIMD width OpenCV's SIFT kernels ran with where the goldens were written (spec §13).
 fn golden_lanes() -> usize {
-    let meta = json_mini::parse(META).expect("meta.json is JSON");
+    lanes_of(META)
+}
+
+fn lanes_of(meta: &str) -> usize {
+    let meta = json_mini::parse(meta).expect("meta.json is JSON");
     meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("opencv_simd_lanes") as usize
 }
 
@@ -78,9 +89,13 @@ fn compare(name: &str, ours: &Features, golden: &[u8]) -> (usize, usize, usize) 
 }
 
 fn sift(bytes: &[u8]) -> (Features, f64) {
+    sift_at(bytes, golden_lanes())
+}
+
+fn sift_at(bytes: &[u8], lanes: usize) -> (Features, f64) {
     let img = GrayImage::decode(bytes).expect("fixture frame decodes");
     let t0 = performance_now();
-    let params = SiftParams { opencv_lanes: golden_lanes(), ..SiftParams::default() };
+    let params = SiftParams { opencv_lanes: lanes, ..SiftParams::default() };
     let f = detect_and_compute(&img, &params);
     (f, performance_now() - t0)
 }
@@ -101,6 +116,20 @@ fn sift_in_the_browser_is_bit_exact_against_opencv() {
          detect+compute {ms0:.1} ms, {ms1:.1} ms; WASM_SIFT_MS={ms_warm:.1}"
     );
     assert_eq!((kp_ok, desc_ok), (n, n), "wasm SIFT differs from OpenCV (IPP off)");
+}
+
+/// Both SIMD widths in the browser, on the frame where OpenCV's differ: each
+/// width gives its own goldens bit for bit (8 lanes is the app's default).
+#[wasm_bindgen_test]
+fn sift_in_the_browser_follows_opencvs_simd_width() {
+    let lanes_avx2 = lanes_of(META_AVX2);
+    assert_ne!(lanes_avx2, golden_lanes(), "the two golden sets should have different widths");
+    for (lanes, golden) in [(golden_lanes(), GOLDEN2), (lanes_avx2, GOLDEN2_AVX2)] {
+        let (f, ms) = sift_at(FRAME2, lanes);
+        let (n, kp_ok, desc_ok) = compare(&format!("000002 at {lanes} lanes"), &f, golden);
+        console_log!("wasm SIFT frame 2 at {lanes} lanes vs OpenCV (IPP off): keypoints {kp_ok}/{n}, descriptors {desc_ok}/{n} bit-exact; {ms:.1} ms");
+        assert_eq!((kp_ok, desc_ok), (n, n), "wasm SIFT at {lanes} lanes differs from OpenCV's");
+    }
 }
 
 /// OpenCV's own features (default-wheel golden) as `Features`.

@@ -23,6 +23,10 @@ get_info.jsonl, one object a line:
   where the dataset string printed is --label (default "tests/fixtures/mykitti"), i.e. what
   `siftlab -d tests/fixtures/mykitti get_info ...` run from the repository root must print.
 
+Two sets are committed, each written on a CPU of its kind (meta.json says which):
+  tests/fixtures/golden        an AVX-512 CPU: OpenCV's SIFT kernels 16 lanes wide
+  tests/fixtures/golden-avx2   an AVX2 CPU without AVX-512: 8 lanes (--out tests/fixtures/golden-avx2)
+
 Usage: python3 tests/scripts/gen_goldens.py [--dataset DIR] [--out DIR] [--draws 300] [--seed 24011]
 """
 from __future__ import annotations

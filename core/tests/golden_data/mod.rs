@@ -10,17 +10,66 @@ use siftlab_core::sift::{KeyPoint, SiftParams};
 
 use super::json_mini;
 
-/// The SIMD width OpenCV's dispatched SIFT kernels ran with where the goldens were
-/// written (spec §13: 16 on AVX-512, 8 on AVX2), from `golden/meta.json`; taken from
-/// there, not from the host, so the tests mean the same on any CPU.
+/// One committed set of OpenCV goldens for the fixture frames, written by
+/// `tests/scripts/gen_goldens.py --out DIR` on one CPU: `noipp/`, `ipp/`,
+/// `get_info.jsonl` and `meta.json`, which records the SIMD width OpenCV's
+/// dispatched SIFT kernels ran with (spec §13: 16 on AVX-512, 8 on AVX2). The
+/// width is taken from there, not from the host, so a test means the same on
+/// any CPU.
+pub struct GoldenSet {
+    /// The folder below `tests/fixtures` (`golden`, `golden-avx2`).
+    pub name: &'static str,
+    pub lanes: usize,
+}
+
+impl GoldenSet {
+    fn new(name: &'static str) -> GoldenSet {
+        let path = fixtures().join(name).join("meta.json");
+        let meta = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let meta = json_mini::parse(&meta).expect("meta.json is JSON");
+        let lanes = meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("meta.json: opencv_simd_lanes") as usize;
+        assert!(matches!(lanes, 8 | 16), "{name}/meta.json: opencv_simd_lanes {lanes}");
+        GoldenSet { name, lanes }
+    }
+
+    pub fn dir(&self) -> PathBuf {
+        fixtures().join(self.name)
+    }
+
+    /// The lab's SIFT parameters at this set's SIMD width.
+    pub fn params(&self) -> SiftParams {
+        SiftParams { opencv_lanes: self.lanes, ..SiftParams::default() }
+    }
+
+    /// The golden of frame `id` of `kind` (`noipp` or `ipp`).
+    pub fn read(&self, kind: &str, id: &str) -> Golden {
+        let path = self.dir().join(kind).join(format!("{id}.sift"));
+        let bytes = fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        parse_golden(&bytes, &path.display().to_string())
+    }
+}
+
+/// The primary set (`golden/`, written on an AVX-512 CPU: 16 lanes).
+pub fn primary_set() -> GoldenSet {
+    GoldenSet::new("golden")
+}
+
+/// Every committed set: the primary one and `golden-avx2/` (an AVX2 CPU, 8
+/// lanes: the width of most students' laptops and the spec's validated
+/// configuration).
+pub fn golden_sets() -> Vec<GoldenSet> {
+    let sets = vec![primary_set(), GoldenSet::new("golden-avx2")];
+    assert_ne!(sets[0].lanes, sets[1].lanes, "the golden sets should cover both SIMD widths");
+    sets
+}
+
+/// The primary set's SIMD width.
 pub fn golden_lanes() -> usize {
-    let meta = fs::read_to_string(fixtures().join("golden/meta.json")).expect("golden/meta.json");
-    let meta = json_mini::parse(&meta).expect("meta.json is JSON");
-    meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("meta.json: opencv_simd_lanes") as usize
+    primary_set().lanes
 }
 
 pub fn golden_params() -> SiftParams {
-    SiftParams { opencv_lanes: golden_lanes(), ..SiftParams::default() }
+    primary_set().params()
 }
 
 pub struct Golden {
@@ -62,9 +111,14 @@ pub fn parse_golden(bytes: &[u8], name: &str) -> Golden {
     Golden { width, height, keypoints, descriptors }
 }
 
-/// Frame ids that have a golden of `kind`, sorted.
+/// Frame ids that have a golden of `kind` in the primary set, sorted.
 pub fn golden_frames(kind: &str) -> Vec<String> {
-    let dir = fixtures().join("golden").join(kind);
+    set_frames(&primary_set(), kind)
+}
+
+/// Frame ids that have a golden of `kind` in `set`, sorted.
+pub fn set_frames(set: &GoldenSet, kind: &str) -> Vec<String> {
+    let dir = set.dir().join(kind);
     let mut ids: Vec<String> = fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("cannot list {}: {e}", dir.display()))
         .filter_map(|e| {
