@@ -110,6 +110,11 @@ test('demo: counts and nndr 0.8 tuples equal the native CLI; URL restores the vi
   await page.click(tid('demo'));
   await idle();
   metrics.demoReadyMs = Date.now() - t0;
+  // The opening view shows a match: the demo's own feature under nndr 0.8.
+  const opening = await page.inputValue(tid('feature'));
+  assert.equal(opening, '455');
+  assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', opening]));
+  assert.notEqual(await tuple(), '((0, 0), [], [])');
   const sift = [0, 1].map((id) => cliSift(id));
   assert.equal(await page.textContent(tid('keypoint-count-prev')), String(sift[0].keypoints.length));
   assert.equal(await page.textContent(tid('keypoint-count-cur')), String(sift[1].keypoints.length));

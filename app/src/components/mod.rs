@@ -64,6 +64,12 @@ fn current_query() -> String {
     web_sys::window().and_then(|w| w.location().search().ok()).unwrap_or_default()
 }
 
+/// The feature the demo opens on: a large keypoint near the middle of frame 0
+/// whose nndr 0.8 match in frame 1 is the same corner 13 px further left, so
+/// the first view shows a match with its circle, line and distance. Feature 0
+/// (the strongest response) sits on the right edge and has no match there.
+pub const DEMO_FEATURE: usize = 455;
+
 /// Applies a link's state to a fresh `Lab` and starts loading what it names.
 pub fn apply_url(lab: Lab, st: &UrlState) {
     if let Some(a) = st.algo.as_deref().filter(|a| matches!(*a, "dt" | "nn" | "nndr")) {
@@ -76,6 +82,8 @@ pub fn apply_url(lab: Lab, st: &UrlState) {
     }
     if let Some(f) = st.feature {
         lab.set_feature(f);
+    } else if st.src.as_deref() != Some("folder") && st.frame.unwrap_or(1) == 1 {
+        lab.set_feature(DEMO_FEATURE);
     }
     if let Some(l) = st.lanes.filter(|l| matches!(l, 8 | 16)) {
         lab.lanes.set(l as usize);
