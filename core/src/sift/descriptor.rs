@@ -705,7 +705,7 @@ fn normalize(raw: &mut [f32; 128], lanes: usize) -> [u8; 128] {
         // with IPP off on 100 synthetic KITTI frames: the FMA form put 8 of
         // 150,041 rows off by one on an AVX-512 CPU and 7 on an AVX2 CPU;
         // this form none on either (a test below holds one of the 7).
-        n2 = n2 + *v * *v;
+        n2 += *v * *v;
     }
     let s = INT_DESCR_FCTR / n2.sqrt().max(FLT_EPSILON);
     let mut out = [0u8; 128];
