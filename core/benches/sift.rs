@@ -1,10 +1,14 @@
 //! SIFT detect+compute on a 1241x376 fixture frame (KITTI size), single thread, as
 //! compared with OpenCV's `detectAndCompute` under `cv2.setNumThreads(1)` by
-//! tests/scripts/bench_compare.sh.
+//! tests/scripts/bench_compare.sh; and the stage that costs most, the five blurs
+//! of the first octave (a 2482x752 plane), on their own.
 
 use std::path::Path;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use siftlab_core::sift::blur::gaussian_blur;
+use siftlab_core::sift::initial::initial_image;
+use siftlab_core::sift::pyramid::level_sigmas;
 use siftlab_core::sift::{detect_and_compute, SiftParams};
 use siftlab_core::GrayImage;
 
@@ -33,5 +37,26 @@ fn bench_sift(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, bench_sift);
+/// Gaussian levels 1..=5 of octave 0 from the frame's doubled base, each blurred
+/// from the one before (spec §4): about two fifths of a VO frame's CPU time.
+fn bench_octave0_blurs(c: &mut Criterion) {
+    let img = load();
+    let params = SiftParams::for_host();
+    let base = initial_image(&img, params.sigma);
+    let sigmas = level_sigmas(params.sigma, params.n_octave_layers);
+    let mut g = c.benchmark_group("sift");
+    g.sample_size(20);
+    g.bench_function("octave0_blurs_2482x752", |b| {
+        b.iter(|| {
+            let mut level = gaussian_blur(black_box(&base), sigmas[1]);
+            for &s in &sigmas[2..] {
+                level = gaussian_blur(&level, s);
+            }
+            level
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(benches, bench_sift, bench_octave0_blurs);
 criterion_main!(benches);
