@@ -6,10 +6,10 @@
 mod golden_data;
 mod json_mini;
 
-use golden_data::{fixtures, golden_lanes, golden_sets};
+use golden_data::{fixtures, golden_frames, golden_lanes, golden_params, golden_sets};
 
 use siftlab_core::matching::{match_feature, matching_info, Strategy};
-use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
+use siftlab_core::sift::{detect_and_compute, Features};
 use siftlab_core::GrayImage;
 
 use std::fs;
@@ -87,7 +87,7 @@ fn library_features(frame: usize) -> std::sync::Arc<Features> {
         .get_or_insert_with(|| {
             let bytes = fs::read(dataset().join(format!("gray/00/image_0/{frame:06}.png"))).unwrap();
             let img = GrayImage::decode(&bytes).unwrap();
-            Arc::new(detect_and_compute(&img, &SiftParams { opencv_lanes: golden_lanes(), ..SiftParams::default() }))
+            Arc::new(detect_and_compute(&img, &golden_params()))
         })
         .clone()
 }
@@ -162,13 +162,7 @@ fn get_info_prints_exactly_what_the_lab_prints() {
 // sift --json against the OpenCV (IPP disabled) goldens
 
 fn first_golden_frame() -> String {
-    let dir = fixtures().join("golden/noipp");
-    let mut ids: Vec<String> = fs::read_dir(&dir)
-        .unwrap()
-        .filter_map(|e| e.ok()?.path().file_stem()?.to_str().map(str::to_owned))
-        .collect();
-    ids.sort();
-    ids.into_iter().next().expect("no noipp goldens")
+    golden_frames("noipp").remove(0)
 }
 
 /// The fixture frame where OpenCV's two SIMD widths disagree (one descriptor
