@@ -2,11 +2,54 @@
 //! natively, plain loops on wasm32 (no threads there). Every parallel
 //! stage writes results that do not depend on the split, as in OpenCV.
 
+#[cfg(not(target_arch = "wasm32"))]
+std::thread_local! {
+    /// Set by [`serial`]: this thread's stages run on it alone.
+    static SERIAL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Runs `f` with every parallel stage it reaches done on the calling thread.
+/// For callers that already keep each core busy with a whole job of their own
+/// (the odometry detects several frames at once): one frame per core needs no
+/// thread start-up or hand-over per stage, and each frame's planes stay in
+/// its core's cache.
+pub fn serial<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        struct Restore(bool);
+        impl Drop for Restore {
+            fn drop(&mut self) {
+                SERIAL.with(|s| s.set(self.0));
+            }
+        }
+        let _restore = Restore(SERIAL.with(|s| s.replace(true)));
+        f()
+    }
+    #[cfg(target_arch = "wasm32")]
+    f()
+}
+
+/// Number of cores this process may use (1 on wasm32).
+pub fn cores() -> usize {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1).min(8)
+    }
+    #[cfg(target_arch = "wasm32")]
+    {
+        1
+    }
+}
+
 /// Number of worker threads to use for one stage.
 pub fn threads() -> usize {
     #[cfg(not(target_arch = "wasm32"))]
     {
-        std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1).min(8)
+        if SERIAL.with(|s| s.get()) {
+            1
+        } else {
+            cores()
+        }
     }
     #[cfg(target_arch = "wasm32")]
     {
@@ -69,4 +112,30 @@ pub fn for_each_chunk_dynamic<T: Send>(out: &mut [T], chunk_len: usize, f: impl 
     }
     #[cfg(target_arch = "wasm32")]
     f(0, out);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn serial_runs_every_stage_on_the_calling_thread_and_then_restores() {
+        let cores = cores();
+        assert_eq!(threads(), cores);
+        let caller = std::thread::current().id();
+        let (inner, nested, ids) = serial(|| {
+            let nested = serial(threads);
+            // The stage's chunks all run here (a 1 MB plane is split when not serial).
+            let mut plane = vec![0u32; 256 * 1024];
+            let ids = std::sync::Mutex::new(Vec::new());
+            for_each_chunk(&mut plane, 1024, |_, _| ids.lock().unwrap().push(std::thread::current().id()));
+            (threads(), nested, ids.into_inner().unwrap())
+        });
+        assert_eq!((inner, nested), (1, 1));
+        assert_eq!(ids, vec![caller]);
+        assert_eq!(threads(), cores, "restored after serial");
+        // Restored on unwinding too.
+        let _ = std::panic::catch_unwind(|| serial(|| panic!("stage failed")));
+        assert_eq!(threads(), cores);
+    }
 }

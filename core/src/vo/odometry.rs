@@ -21,7 +21,8 @@ use crate::{Error, GrayImage, Result};
 
 /// Returns the points the loop tracks (the lab: SIFT keypoint positions, in
 /// detector order).
-pub type Detector = Box<dyn FnMut(&GrayImage) -> Vec<[f32; 2]> + Send>;
+/// Shared by the threads of [`run`], which detect several frames at once.
+pub type Detector = Box<dyn Fn(&GrayImage) -> Vec<[f32; 2]> + Send + Sync>;
 
 /// The lab's detector: `cv2.SIFT_create(nfeatures=1500).detect(img)` positions.
 pub fn sift_detector(params: SiftParams) -> Detector {
@@ -316,58 +317,87 @@ pub fn run(
     mut load: impl FnMut(usize) -> Result<GrayImage> + Send,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<StepResult>> {
+    run_with_workers(odo, n, poses, load, progress, crate::sift::par::cores().clamp(1, 4))
+}
+
+/// [`run`] with `workers` detection threads natively (ignored on wasm32).
+fn run_with_workers(
+    odo: &mut Odometry,
+    n: usize,
+    poses: &[PoseRow],
+    mut load: impl FnMut(usize) -> Result<GrayImage> + Send,
+    progress: &mut dyn FnMut(usize, usize),
+    workers: usize,
+) -> Result<Vec<StepResult>> {
     let mut out = Vec::with_capacity(n);
     #[cfg(not(target_arch = "wasm32"))]
     {
-        // A three-stage pipeline: frame i+2 is read and decoded, frame i+1's
-        // keypoints are detected, and frame i is tracked, all at once.
+        // A pipeline: one thread reads and decodes the frames; `workers`
+        // threads detect the keypoints of frames ahead, frame i on worker
+        // i % workers, each frame on one core (`par::serial`); this thread
+        // tracks frame after frame, taking the workers' results in frame order.
         // Detection needs only the image, so running it ahead changes no
-        // result; it keeps both cores busy through the serial parts of each
-        // stage (RANSAC and recoverPose, SIFT's ordering).
+        // result. A whole frame per core beats sharing every stage of one
+        // frame between the cores: no hand-over per stage, and each frame's
+        // planes stay in its own core's cache.
         let first = odo.frame;
-        let mut detector: Detector = std::mem::replace(&mut odo.detector, Box::new(|_| Vec::new()));
+        let detector: Detector = std::mem::replace(&mut odo.detector, Box::new(|_| Vec::new()));
+        let workers = workers.max(1);
+        let detector_ref = &detector;
         let result = std::thread::scope(|s| -> Result<()> {
-            let (tx_img, rx_img) = std::sync::mpsc::sync_channel(1);
-            let (tx_det, rx_det) = std::sync::mpsc::sync_channel(1);
+            let mut to_workers = Vec::with_capacity(workers);
+            let mut from_workers = Vec::with_capacity(workers);
+            for _ in 0..workers {
+                let (tx_img, rx_img) = std::sync::mpsc::sync_channel::<(usize, Result<GrayImage>)>(1);
+                let (tx_det, rx_det) = std::sync::mpsc::sync_channel(1);
+                to_workers.push(tx_img);
+                from_workers.push(rx_det);
+                s.spawn(move || {
+                    for (i, frame) in rx_img {
+                        // Frame 1 never re-detects (§5: it only sets R, t).
+                        let item = frame.map(|img| {
+                            let points = (first + i != 1).then(|| {
+                                if workers > 1 {
+                                    crate::sift::par::serial(|| detector_ref(&img))
+                                } else {
+                                    detector_ref(&img)
+                                }
+                            });
+                            (img, points)
+                        });
+                        let failed = item.is_err();
+                        if tx_det.send(item).is_err() || failed {
+                            break;
+                        }
+                    }
+                });
+            }
             s.spawn(move || {
                 for i in 0..n {
                     let frame = load(i);
                     let failed = frame.is_err();
-                    if tx_img.send(frame).is_err() || failed {
+                    if to_workers[i % workers].send((i, frame)).is_err() || failed {
                         break;
                     }
                 }
-            });
-            let detecting = s.spawn(move || {
-                for (i, frame) in rx_img.into_iter().enumerate() {
-                    // Frame 1 never re-detects (§5: it only sets R, t).
-                    let item = frame.map(|img| {
-                        let points = (first + i != 1).then(|| detector(&img));
-                        (img, points)
-                    });
-                    let failed = item.is_err();
-                    if tx_det.send(item).is_err() || failed {
-                        break;
-                    }
-                }
-                detector
             });
             let mut track = || -> Result<()> {
                 for i in 0..n {
-                    let (img, points) =
-                        rx_det.recv().map_err(|_| Error::Odometry(format!("frame {i} could not be read")))??;
+                    let (img, points) = from_workers[i % workers]
+                        .recv()
+                        .map_err(|_| Error::Odometry(format!("frame {i} could not be read")))??;
                     out.push(odo.step_detected(&img, poses.get(i), points)?);
                     progress(i + 1, n);
                 }
                 Ok(())
             };
-            let tracked = track();
-            // Unblock and stop the other stages, then take the detector back.
-            drop(rx_det);
-            // A panicking detector is a bug: let it surface as one.
-            odo.detector = detecting.join().unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+            let tracked = if workers > 1 { crate::sift::par::serial(track) } else { track() };
+            // Unblock and stop the other stages (a worker blocked on a send
+            // sees its receiver gone; the reader then sees the workers gone).
+            drop(from_workers);
             tracked
         });
+        odo.detector = detector;
         result?;
     }
     #[cfg(target_arch = "wasm32")]
@@ -488,22 +518,37 @@ mod tests {
         let mut stepped = Odometry::with_detector(cam, Box::new(grid)).unwrap();
         stepped.min_points = 10_000;
         let want: Vec<StepResult> = (0..6).map(|k| stepped.step(&img(k), Some(&poses[k])).unwrap()).collect();
-        let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
-        odo.min_points = 10_000;
-        let mut seen = Vec::new();
-        let got = run(&mut odo, 6, &poses, |k| Ok(img(k)), &mut |d, n| seen.push((d, n))).unwrap();
-        assert_eq!(got, want);
-        assert!(got[2..].iter().all(|r| r.redetected));
-        assert_eq!(seen.last(), Some(&(6, 6)));
-        assert_eq!(odo.pose(), stepped.pose());
-        // The detector is back in place: a further step detects with it.
-        let r = odo.step(&img(6), Some(&gt(4.9))).unwrap();
-        assert!(r.redetected && r.points_out > 300);
+        // One detection thread, two (this machine's usual) and three: each
+        // takes every n-th frame, and the results come back in frame order.
+        for workers in 1..=3 {
+            let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+            odo.min_points = 10_000;
+            let mut seen = Vec::new();
+            let got = run_with_workers(&mut odo, 6, &poses, |k| Ok(img(k)), &mut |d, n| seen.push((d, n)), workers)
+                .unwrap();
+            assert_eq!(got, want, "{workers} workers");
+            assert!(got[2..].iter().all(|r| r.redetected));
+            assert_eq!(seen, (1..=6).map(|d| (d, 6)).collect::<Vec<_>>());
+            assert_eq!(odo.pose(), stepped.pose());
+            // The detector is back in place: a further step detects with it.
+            let r = odo.step(&img(6), Some(&gt(4.9))).unwrap();
+            assert!(r.redetected && r.points_out > 300);
 
-        let mut failing = Odometry::with_detector(cam, Box::new(grid)).unwrap();
-        let e = run(&mut failing, 6, &poses, |k| if k == 3 { Err(Error::Odometry("frame 3 is broken".into())) } else { Ok(img(k)) }, &mut |_, _| {})
-            .unwrap_err();
-        assert!(e.to_string().contains("frame 3 is broken"), "{e}");
-        assert_eq!(failing.next_frame(), 3);
+            // A frame that cannot be read stops the run with its error, on
+            // whichever worker it lands, after the frames before it.
+            for broken in [1, 3, 4] {
+                let mut failing = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+                let load = |k: usize| {
+                    if k == broken {
+                        Err(Error::Odometry(format!("frame {k} is broken")))
+                    } else {
+                        Ok(img(k))
+                    }
+                };
+                let e = run_with_workers(&mut failing, 6, &poses, load, &mut |_, _| {}, workers).unwrap_err();
+                assert!(e.to_string().contains(&format!("frame {broken} is broken")), "{e}");
+                assert_eq!(failing.next_frame(), broken, "{workers} workers");
+            }
+        }
     }
 }
