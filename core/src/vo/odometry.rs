@@ -314,7 +314,7 @@ pub fn run(
     odo: &mut Odometry,
     n: usize,
     poses: &[PoseRow],
-    mut load: impl FnMut(usize) -> Result<GrayImage> + Send,
+    load: impl FnMut(usize) -> Result<GrayImage> + Send,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<StepResult>> {
     run_with_workers(odo, n, poses, load, progress, crate::sift::par::cores().clamp(1, 4))
@@ -400,6 +400,8 @@ fn run_with_workers(
         odo.detector = detector;
         result?;
     }
+    #[cfg(target_arch = "wasm32")]
+    let _ = workers;
     #[cfg(target_arch = "wasm32")]
     for i in 0..n {
         let img = load(i)?;
