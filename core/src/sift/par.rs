@@ -4,29 +4,38 @@
 
 #[cfg(not(target_arch = "wasm32"))]
 std::thread_local! {
-    /// Set by [`serial`]: this thread's stages run on it alone.
-    static SERIAL: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    /// Set by [`with_threads`]: the most threads this thread's stages use
+    /// (0: no limit but the cores).
+    static LIMIT: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
 }
 
-/// Runs `f` with every parallel stage it reaches done on the calling thread.
-/// For callers that already keep each core busy with a whole job of their own
-/// (the odometry detects several frames at once): one frame per core needs no
-/// thread start-up or hand-over per stage, and each frame's planes stay in
-/// its core's cache.
-pub fn serial<R>(f: impl FnOnce() -> R) -> R {
+/// Runs `f` with every parallel stage it reaches using at most `n` threads
+/// (the calling one included; at least 1). For callers that already keep the
+/// cores busy with whole jobs of their own (the odometry detects several
+/// frames at once): one frame per core needs no thread start-up or hand-over
+/// per stage, and each frame's planes stay in its core's cache.
+pub fn with_threads<R>(n: usize, f: impl FnOnce() -> R) -> R {
     #[cfg(not(target_arch = "wasm32"))]
     {
-        struct Restore(bool);
+        struct Restore(usize);
         impl Drop for Restore {
             fn drop(&mut self) {
-                SERIAL.with(|s| s.set(self.0));
+                LIMIT.with(|s| s.set(self.0));
             }
         }
-        let _restore = Restore(SERIAL.with(|s| s.replace(true)));
+        let _restore = Restore(LIMIT.with(|s| s.replace(n.max(1))));
         f()
     }
     #[cfg(target_arch = "wasm32")]
-    f()
+    {
+        let _ = n;
+        f()
+    }
+}
+
+/// [`with_threads`] with one thread: every stage on the calling thread.
+pub fn serial<R>(f: impl FnOnce() -> R) -> R {
+    with_threads(1, f)
 }
 
 /// Number of cores this process may use (1 on wasm32).
@@ -45,10 +54,9 @@ pub fn cores() -> usize {
 pub fn threads() -> usize {
     #[cfg(not(target_arch = "wasm32"))]
     {
-        if SERIAL.with(|s| s.get()) {
-            1
-        } else {
-            cores()
+        match LIMIT.with(|s| s.get()) {
+            0 => cores(),
+            n => n.min(cores()),
         }
     }
     #[cfg(target_arch = "wasm32")]
@@ -134,6 +142,7 @@ mod tests {
         assert_eq!((inner, nested), (1, 1));
         assert_eq!(ids, vec![caller]);
         assert_eq!(threads(), cores, "restored after serial");
+        assert_eq!(with_threads(2, || (threads(), serial(threads), threads())), (2.min(cores), 1, 2.min(cores)));
         // Restored on unwinding too.
         let _ = std::panic::catch_unwind(|| serial(|| panic!("stage failed")));
         assert_eq!(threads(), cores);

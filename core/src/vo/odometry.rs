@@ -334,7 +334,8 @@ fn run_with_workers(
     {
         // A pipeline: one thread reads and decodes the frames; `workers`
         // threads detect the keypoints of frames ahead, frame i on worker
-        // i % workers, each frame on one core (`par::serial`); this thread
+        // i % workers, each on its share of the cores (`par::with_threads`:
+        // one core each on a 2-core machine); this thread
         // tracks frame after frame, taking the workers' results in frame order.
         // Detection needs only the image, so running it ahead changes no
         // result. A whole frame per core beats sharing every stage of one
@@ -343,6 +344,8 @@ fn run_with_workers(
         let first = odo.frame;
         let detector: Detector = std::mem::replace(&mut odo.detector, Box::new(|_| Vec::new()));
         let workers = workers.max(1);
+        // The cores shared out: one each on this 2-core machine.
+        let per_worker = (crate::sift::par::cores() / workers).max(1);
         let detector_ref = &detector;
         let result = std::thread::scope(|s| -> Result<()> {
             let mut to_workers = Vec::with_capacity(workers);
@@ -357,11 +360,7 @@ fn run_with_workers(
                         // Frame 1 never re-detects (§5: it only sets R, t).
                         let item = frame.map(|img| {
                             let points = (first + i != 1).then(|| {
-                                if workers > 1 {
-                                    crate::sift::par::serial(|| detector_ref(&img))
-                                } else {
-                                    detector_ref(&img)
-                                }
+                                crate::sift::par::with_threads(per_worker, || detector_ref(&img))
                             });
                             (img, points)
                         });
@@ -391,7 +390,7 @@ fn run_with_workers(
                 }
                 Ok(())
             };
-            let tracked = if workers > 1 { crate::sift::par::serial(track) } else { track() };
+            let tracked = crate::sift::par::with_threads(per_worker, track);
             // Unblock and stop the other stages (a worker blocked on a send
             // sees its receiver gone; the reader then sees the workers gone).
             drop(from_workers);
