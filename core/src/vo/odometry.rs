@@ -380,7 +380,7 @@ fn run_with_workers(
                     }
                 }
             });
-            let mut track = || -> Result<()> {
+            let track = || -> Result<()> {
                 for i in 0..n {
                     let (img, points) = from_workers[i % workers]
                         .recv()
