@@ -79,7 +79,10 @@ fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
     let (w, h) = (src.width, src.height);
     let (r, c) = (kx.len() / 2, ky.len() / 2);
     let n = out.len() / w;
-    let slots = 2 * c + 1;
+    // Two output rows at a time where the kernel exists (see
+    // `accumulate_column_pair`): the ring then holds their 2c + 2 rows.
+    let pairs_mode = column_pairs_available();
+    let slots = 2 * c + 1 + pairs_mode as usize;
     // The ring comes from the plane pool (every row is written before it is read).
     let mut ring = super::image::Plane::for_overwrite(slots * w, 1);
     let ring = &mut ring.data;
@@ -110,13 +113,25 @@ fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
     for v in first - c as isize..first + c as isize {
         fill(ring, &mut tame, v);
     }
-    for dy in 0..n {
+    let mut dy = 0;
+    while dy < n {
         let y = first + dy as isize;
+        if pairs_mode && dy + 1 < n {
+            fill(ring, &mut tame, y + c as isize);
+            fill(ring, &mut tame, y + c as isize + 1);
+            let row = |v: isize| &ring[slot(v) * w..(slot(v) + 1) * w];
+            let rows: Vec<&[f32]> = (y - c as isize..=y + c as isize + 1).map(row).collect();
+            let (d0, d1) = out[dy * w..(dy + 2) * w].split_at_mut(w);
+            accumulate_column_pair(&rows, &ky[c..], d0, d1);
+            dy += 2;
+            continue;
+        }
         fill(ring, &mut tame, y + c as isize);
         let row = |v: isize| &ring[slot(v) * w..(slot(v) + 1) * w];
         let pairs: Vec<(&[f32], &[f32])> = (1..=c as isize).map(|k| (row(y + k), row(y - k))).collect();
         let all_tame = tame.iter().all(|&t| t);
         accumulate_column(row(y), &pairs, &ky[c..], &mut out[dy * w..(dy + 1) * w], all_tame);
+        dy += 1;
     }
 }
 
@@ -269,6 +284,95 @@ fn accumulate_column_generic(
     }
 }
 
+/// Output rows y and y + 1 of the column pass at once, from `rows` = the
+/// 2c + 2 ring rows y − c ..= y + c + 1 and `ky` = the kernel's centre and
+/// right half. Row y + 1's taps reuse row y's loads shifted by one tap
+/// (R[y+1+k] is R[y+(k+1)], R[y+1−k] is R[y−(k−1)]), so a tap costs two
+/// loads per vector for both rows instead of two per row: the ring is read
+/// from L2, and that read bounded the one-row pass. Each pixel still sees
+/// OpenCV's operations in OpenCV's order: centre·k0, then fma(up + down, kk, acc)
+/// for k = 1..=c.
+#[inline(always)]
+fn column_pair_block<const B: usize>(
+    x: usize,
+    rows: &[&[f32]],
+    ky: &[f32],
+    d0: &mut [f32],
+    d1: &mut [f32],
+    fma: &impl Fn(f32, f32, f32) -> f32,
+) {
+    let c = ky.len() - 1;
+    let load = |r: &[f32]| -> [f32; B] {
+        let mut v = [0f32; B];
+        v.copy_from_slice(&r[x..x + B]);
+        v
+    };
+    let (centre0, centre1) = (load(rows[c]), load(rows[c + 1]));
+    let (mut acc0, mut acc1) = ([0f32; B], [0f32; B]);
+    for l in 0..B {
+        acc0[l] = centre0[l] * ky[0];
+        acc1[l] = centre1[l] * ky[0];
+    }
+    // up of row y at tap k, and down of row y + 1 at tap k.
+    let (mut up0, mut down1) = (centre1, centre0);
+    for (k, &kv) in ky.iter().enumerate().skip(1) {
+        let up1 = load(rows[c + 1 + k]);
+        let down0 = load(rows[c - k]);
+        for l in 0..B {
+            acc0[l] = fma(up0[l] + down0[l], kv, acc0[l]);
+            acc1[l] = fma(up1[l] + down1[l], kv, acc1[l]);
+        }
+        up0 = up1;
+        down1 = down0;
+    }
+    d0[x..x + B].copy_from_slice(&acc0);
+    d1[x..x + B].copy_from_slice(&acc1);
+}
+
+/// Pixels per block of the two-row column pass: two AVX2 vectors a row
+/// (acc, up and down of both rows fill 12 of the 16 registers).
+const PAIR_BLOCK: usize = 16;
+
+#[inline(always)]
+fn accumulate_column_pair_generic(rows: &[&[f32]], ky: &[f32], d0: &mut [f32], d1: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
+    let w = d0.len();
+    let mut x = 0;
+    while x + PAIR_BLOCK <= w {
+        column_pair_block::<PAIR_BLOCK>(x, rows, ky, d0, d1, &fma);
+        x += PAIR_BLOCK;
+    }
+    if x < w && w >= PAIR_BLOCK {
+        column_pair_block::<PAIR_BLOCK>(w - PAIR_BLOCK, rows, ky, d0, d1, &fma);
+        x = w;
+    }
+    while x < w {
+        column_pair_block::<1>(x, rows, ky, d0, d1, &fma);
+        x += 1;
+    }
+}
+
+/// Whether [`accumulate_column_pair`] has a kernel here: AVX2 with FMA
+/// without AVX-512 (whose one-row pass takes a row's 16 lanes per load).
+fn column_pairs_available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    {
+        crate::simd::avx2_fma() && !crate::simd::avx512f_fma()
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        false
+    }
+}
+
+fn accumulate_column_pair(rows: &[&[f32]], ky: &[f32], d0: &mut [f32], d1: &mut [f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2_fma() {
+        // SAFETY: the CPU supports the features the function was compiled for.
+        return unsafe { x86::column_pair_avx2(rows, ky, d0, d1) };
+    }
+    accumulate_column_pair_generic(rows, ky, d0, d1, super::num::fma)
+}
+
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     #[target_feature(enable = "avx2,fma")]
@@ -286,6 +390,60 @@ mod x86 {
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn column_avx2(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
         super::accumulate_column_generic(centre, pairs, ky, dst, f32::mul_add)
+    }
+
+    /// [`super::column_pair_block`] in intrinsics, three vectors a row (the
+    /// generic form compiled to partial-vector shuffles for its carried
+    /// arrays): acc, up and down of both rows take 12 registers.
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn column_pair_avx2(rows: &[&[f32]], ky: &[f32], d0: &mut [f32], d1: &mut [f32]) {
+        const V: usize = 3;
+        let (c, w) = (ky.len() - 1, d0.len());
+        assert!(rows.len() == 2 * c + 2 && d1.len() == w && rows.iter().all(|r| r.len() >= w));
+        if w < 8 * V {
+            return super::accumulate_column_pair_generic(rows, ky, d0, d1, f32::mul_add);
+        }
+        let p: Vec<*const f32> = rows.iter().map(|r| r.as_ptr()).collect();
+        let (o0, o1) = (d0.as_mut_ptr(), d1.as_mut_ptr());
+        let mut x = 0;
+        while x + 8 * V <= w {
+            pair_block(&p, ky, x, o0, o1);
+            x += 8 * V;
+        }
+        if x < w {
+            // The last block ends at the row's end, overlapping the one before.
+            pair_block(&p, ky, w - 8 * V, o0, o1);
+        }
+    }
+
+    /// Pixels x..x + 24 of both rows; `p` as `rows` in [`column_pair_avx2`].
+    /// Inlined there, so compiled with its features.
+    #[inline(always)]
+    unsafe fn pair_block(p: &[*const f32], ky: &[f32], x: usize, o0: *mut f32, o1: *mut f32) {
+        use std::arch::x86_64::*;
+        const V: usize = 3;
+        let c = ky.len() - 1;
+        let load = |r: *const f32| -> [__m256; V] { std::array::from_fn(|v| _mm256_loadu_ps(r.add(x + 8 * v))) };
+        let k0 = _mm256_set1_ps(ky[0]);
+        let (centre0, centre1) = (load(p[c]), load(p[c + 1]));
+        let mut acc0: [__m256; V] = std::array::from_fn(|v| _mm256_mul_ps(centre0[v], k0));
+        let mut acc1: [__m256; V] = std::array::from_fn(|v| _mm256_mul_ps(centre1[v], k0));
+        let (mut up0, mut down1) = (centre1, centre0);
+        for (k, &kv) in ky.iter().enumerate().skip(1) {
+            let kv = _mm256_set1_ps(kv);
+            let up1 = load(p[c + 1 + k]);
+            let down0 = load(p[c - k]);
+            for v in 0..V {
+                acc0[v] = _mm256_fmadd_ps(_mm256_add_ps(up0[v], down0[v]), kv, acc0[v]);
+                acc1[v] = _mm256_fmadd_ps(_mm256_add_ps(up1[v], down1[v]), kv, acc1[v]);
+            }
+            up0 = up1;
+            down1 = down0;
+        }
+        for v in 0..V {
+            _mm256_storeu_ps(o0.add(x + 8 * v), acc0[v]);
+            _mm256_storeu_ps(o1.add(x + 8 * v), acc1[v]);
+        }
     }
 
     #[target_feature(enable = "avx512f,avx2,fma")]
