@@ -55,6 +55,19 @@ fn bench_octave0_blurs(c: &mut Criterion) {
             level
         })
     });
+    // The same on the calling thread alone: how the odometry runs it, one
+    // frame per core (`par::serial`).
+    g.bench_function("octave0_blurs_2482x752_1t", |b| {
+        b.iter(|| {
+            siftlab_core::sift::par::serial(|| {
+                let mut level = gaussian_blur(black_box(&base), sigmas[1]);
+                for &s in &sigmas[2..] {
+                    level = gaussian_blur(&level, s);
+                }
+                level
+            })
+        })
+    });
     g.finish();
 }
 
