@@ -181,6 +181,19 @@ fn row_filter(row: &[f32], kx: &[f32], padded: &mut [f32], dst: &mut [f32]) {
 const BLOCK: usize = 64;
 const SMALL_BLOCK: usize = 16;
 
+/// Starts of blocks `x..x + b` covering `0..w`: one after another, the last
+/// ending at `w` and overlapping the one before (each pixel's value depends
+/// only on its own taps, so the overlap is recomputed identically, where a
+/// lone pixel would cost a chain of dependent FMAs); and where the uncovered
+/// rest starts: `w`, or 0 when `w < b`. (No closure: a closure here would be
+/// compiled apart from its caller, without the caller's FMA feature.)
+#[inline(always)]
+fn blocks(w: usize, b: usize) -> (impl Iterator<Item = usize>, usize) {
+    let whole = if w < b { 0 } else { w / b };
+    let last = (w >= b && w % b != 0).then_some(w.wrapping_sub(b));
+    ((0..whole).map(move |i| i * b).chain(last), if w < b { 0 } else { w })
+}
+
 #[inline(always)]
 fn row_block<const B: usize>(src: &[f32], kx: &[f32], dst: &mut [f32], fma: &impl Fn(f32, f32, f32) -> f32) {
     let mut acc = [0f32; B];
@@ -198,25 +211,16 @@ fn row_block<const B: usize>(src: &[f32], kx: &[f32], dst: &mut [f32], fma: &imp
 #[inline(always)]
 fn accumulate_row_generic<const B: usize>(padded: &[f32], kx: &[f32], dst: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
     let w = dst.len();
-    let mut x = 0;
-    while x + B <= w {
+    let (starts, mut x) = blocks(w, B);
+    for x in starts {
         row_block::<B>(&padded[x..], kx, &mut dst[x..], &fma);
-        x += B;
     }
-    // The remainder as one block ending at the row's end, overlapping the
-    // last full one: its pixels come out the same, and a lone pixel costs a
-    // chain of 2r+1 dependent FMAs.
-    if x < w && w >= B {
-        row_block::<B>(&padded[w - B..], kx, &mut dst[w - B..], &fma);
-        x = w;
-    }
-    while x + SMALL_BLOCK <= w {
-        row_block::<SMALL_BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
-        x += SMALL_BLOCK;
-    }
-    if x < w && w >= SMALL_BLOCK {
-        row_block::<SMALL_BLOCK>(&padded[w - SMALL_BLOCK..], kx, &mut dst[w - SMALL_BLOCK..], &fma);
-        x = w;
+    if x == 0 {
+        let (starts, rest) = blocks(w, SMALL_BLOCK);
+        for x in starts {
+            row_block::<SMALL_BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
+        }
+        x = rest;
     }
     for (i, d) in dst.iter_mut().enumerate().skip(x) {
         let mut a = padded[i] * kx[0];
@@ -258,22 +262,16 @@ fn accumulate_column_generic(
     fma: impl Fn(f32, f32, f32) -> f32,
 ) {
     let w = dst.len();
-    let mut x = 0;
-    while x + BLOCK <= w {
+    let (starts, mut x) = blocks(w, BLOCK);
+    for x in starts {
         column_block::<BLOCK>(x, centre, pairs, ky, dst, &fma);
-        x += BLOCK;
     }
-    if x < w && w >= BLOCK {
-        column_block::<BLOCK>(w - BLOCK, centre, pairs, ky, dst, &fma);
-        x = w;
-    }
-    while x + SMALL_BLOCK <= w {
-        column_block::<SMALL_BLOCK>(x, centre, pairs, ky, dst, &fma);
-        x += SMALL_BLOCK;
-    }
-    if x < w && w >= SMALL_BLOCK {
-        column_block::<SMALL_BLOCK>(w - SMALL_BLOCK, centre, pairs, ky, dst, &fma);
-        x = w;
+    if x == 0 {
+        let (starts, rest) = blocks(w, SMALL_BLOCK);
+        for x in starts {
+            column_block::<SMALL_BLOCK>(x, centre, pairs, ky, dst, &fma);
+        }
+        x = rest;
     }
     for i in x..w {
         let mut a = centre[i] * ky[0];
@@ -336,14 +334,9 @@ const PAIR_BLOCK: usize = 16;
 #[inline(always)]
 fn accumulate_column_pair_generic(rows: &[&[f32]], ky: &[f32], d0: &mut [f32], d1: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
     let w = d0.len();
-    let mut x = 0;
-    while x + PAIR_BLOCK <= w {
+    let (starts, mut x) = blocks(w, PAIR_BLOCK);
+    for x in starts {
         column_pair_block::<PAIR_BLOCK>(x, rows, ky, d0, d1, &fma);
-        x += PAIR_BLOCK;
-    }
-    if x < w && w >= PAIR_BLOCK {
-        column_pair_block::<PAIR_BLOCK>(w - PAIR_BLOCK, rows, ky, d0, d1, &fma);
-        x = w;
     }
     while x < w {
         column_pair_block::<1>(x, rows, ky, d0, d1, &fma);
@@ -405,14 +398,8 @@ mod x86 {
         }
         let p: Vec<*const f32> = rows.iter().map(|r| r.as_ptr()).collect();
         let (o0, o1) = (d0.as_mut_ptr(), d1.as_mut_ptr());
-        let mut x = 0;
-        while x + 8 * V <= w {
+        for x in super::blocks(w, 8 * V).0 {
             pair_block(&p, ky, x, o0, o1);
-            x += 8 * V;
-        }
-        if x < w {
-            // The last block ends at the row's end, overlapping the one before.
-            pair_block(&p, ky, w - 8 * V, o0, o1);
         }
     }
 
@@ -879,6 +866,19 @@ mod tests {
 
     fn hex(k: &[f32]) -> Vec<u32> {
         k[..k.len() / 2 + 1].iter().map(|v| v.to_bits()).collect()
+    }
+
+    #[test]
+    fn blocks_cover_the_row_with_one_overlapping_last_block() {
+        let run = |w, b| {
+            let (starts, rest) = blocks(w, b);
+            (starts.collect::<Vec<_>>(), rest)
+        };
+        assert_eq!(run(10, 4), (vec![0, 4, 6], 10));
+        assert_eq!(run(8, 4), (vec![0, 4], 8));
+        assert_eq!(run(4, 4), (vec![0], 4));
+        assert_eq!(run(3, 4), (vec![], 0));
+        assert_eq!(run(2482, 64), ((0..38).map(|i| i * 64).chain([2418]).collect(), 2482));
     }
 
     #[test]
