@@ -390,36 +390,38 @@ mod x86 {
     /// arrays): acc, up and down of both rows take 12 registers.
     #[target_feature(enable = "avx2,fma")]
     pub unsafe fn column_pair_avx2(rows: &[&[f32]], ky: &[f32], d0: &mut [f32], d1: &mut [f32]) {
-        const V: usize = 3;
         let (c, w) = (ky.len() - 1, d0.len());
         assert!(rows.len() == 2 * c + 2 && d1.len() == w && rows.iter().all(|r| r.len() >= w));
-        if w < 8 * V {
+        if w < 8 * PAIR_V {
             return super::accumulate_column_pair_generic(rows, ky, d0, d1, f32::mul_add);
         }
-        let p: Vec<*const f32> = rows.iter().map(|r| r.as_ptr()).collect();
         let (o0, o1) = (d0.as_mut_ptr(), d1.as_mut_ptr());
-        for x in super::blocks(w, 8 * V).0 {
-            pair_block(&p, ky, x, o0, o1);
+        for x in super::blocks(w, 8 * PAIR_V).0 {
+            pair_block(rows, ky, x, o0, o1);
         }
     }
 
-    /// Pixels x..x + 24 of both rows; `p` as `rows` in [`column_pair_avx2`].
+    /// AVX2 vectors a row in [`column_pair_avx2`]'s blocks.
+    const PAIR_V: usize = 3;
+
+    /// Pixels x..x + 24 of both rows, `rows` as in [`column_pair_avx2`].
     /// Inlined there, so compiled with its features.
     #[inline(always)]
-    unsafe fn pair_block(p: &[*const f32], ky: &[f32], x: usize, o0: *mut f32, o1: *mut f32) {
+    unsafe fn pair_block(rows: &[&[f32]], ky: &[f32], x: usize, o0: *mut f32, o1: *mut f32) {
         use std::arch::x86_64::*;
-        const V: usize = 3;
+        const V: usize = PAIR_V;
         let c = ky.len() - 1;
-        let load = |r: *const f32| -> [__m256; V] { std::array::from_fn(|v| _mm256_loadu_ps(r.add(x + 8 * v))) };
+        // Every row holds x + 8V pixels (asserted by the caller).
+        let load = |r: &[f32]| -> [__m256; V] { std::array::from_fn(|v| _mm256_loadu_ps(r.as_ptr().add(x + 8 * v))) };
         let k0 = _mm256_set1_ps(ky[0]);
-        let (centre0, centre1) = (load(p[c]), load(p[c + 1]));
+        let (centre0, centre1) = (load(rows[c]), load(rows[c + 1]));
         let mut acc0: [__m256; V] = std::array::from_fn(|v| _mm256_mul_ps(centre0[v], k0));
         let mut acc1: [__m256; V] = std::array::from_fn(|v| _mm256_mul_ps(centre1[v], k0));
         let (mut up0, mut down1) = (centre1, centre0);
         for (k, &kv) in ky.iter().enumerate().skip(1) {
             let kv = _mm256_set1_ps(kv);
-            let up1 = load(p[c + 1 + k]);
-            let down0 = load(p[c - k]);
+            let up1 = load(rows[c + 1 + k]);
+            let down0 = load(rows[c - k]);
             for v in 0..V {
                 acc0[v] = _mm256_fmadd_ps(_mm256_add_ps(up0[v], down0[v]), kv, acc0[v]);
                 acc1[v] = _mm256_fmadd_ps(_mm256_add_ps(up1[v], down1[v]), kv, acc1[v]);

@@ -335,8 +335,8 @@ fn run_with_workers(
         // A pipeline: one thread reads and decodes the frames; `workers`
         // threads detect the keypoints of frames ahead, frame i on worker
         // i % workers, each on its share of the cores (`par::with_threads`:
-        // one core each on a 2-core machine); this thread
-        // tracks frame after frame, taking the workers' results in frame order.
+        // one core each on a 2-core machine); this thread tracks frame after
+        // frame, taking the workers' results in frame order.
         // Detection needs only the image, so running it ahead changes no
         // result. A whole frame per core beats sharing every stage of one
         // frame between the cores: no hand-over per stage, and each frame's
