@@ -155,7 +155,10 @@ fn find_keypoints(ss: &ScaleSpace, p: &SiftParams) -> Vec<KeyPoint> {
 fn run_parallel<J: Sync>(jobs: &[J], f: impl Fn(&J, &mut Vec<KeyPoint>) + Sync, out: &mut Vec<KeyPoint>) {
     #[cfg(not(target_arch = "wasm32"))]
     {
-        let threads = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(1).min(jobs.len());
+        // The cap of `par::with_threads`: an odometry detection worker,
+        // one frame per core, scans on its own thread (before, each scan
+        // started threads for every core, four busy threads on two cores).
+        let threads = par::threads().min(jobs.len());
         if threads > 1 {
             let next = std::sync::atomic::AtomicUsize::new(0);
             let parts: Vec<Vec<KeyPoint>> = std::thread::scope(|s| {

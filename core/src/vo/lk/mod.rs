@@ -642,6 +642,33 @@ fn lk_from_images(prev: &GrayImage, next: &GrayImage, pts: &[[f32; 2]], params: 
 }
 
 fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams, scalar: bool) -> LkResult {
+    let n = pts.len();
+    // Visit the points in bands of rows, left to right within a band, not
+    // in the caller's order (for SIFT keypoints that is response order,
+    // spatially random): neighbouring windows then share cached rows of the
+    // pyramids and derivative planes. Each point's result depends on its
+    // own window only, so the order changes the speed, not a bit of them.
+    let mut order: Vec<u32> = (0..n as u32).collect();
+    order.sort_by_key(|&i| {
+        let [x, y] = pts[i as usize];
+        // Keys from the clamped coordinates: NaN or huge inputs sort anywhere.
+        let band = (y.clamp(-1.0e6, 1.0e6) as i32) >> 5;
+        (band, x.clamp(-1.0e6, 1.0e6) as i32)
+    });
+    let sorted: Vec<[f32; 2]> = order.iter().map(|&i| pts[i as usize]).collect();
+    let out = track_ordered(prep, &sorted, params, scalar);
+    let mut next_pts = vec![[0f32; 2]; n];
+    let mut status = vec![true; n];
+    let mut err = vec![0f32; n];
+    for (k, &i) in order.iter().enumerate() {
+        next_pts[i as usize] = out.next_pts[k];
+        status[i as usize] = out.status[k];
+        err[i as usize] = out.err[k];
+    }
+    LkResult { next_pts, status, err }
+}
+
+fn track_ordered(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams, scalar: bool) -> LkResult {
     let max_level = prep.prev.len().min(prep.next.len()) - 1;
     let max_count = params.max_count.min(100);
     let eps = params.epsilon.clamp(0.0, 10.0);
@@ -661,7 +688,9 @@ fn track_prepared(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams, scalar: 
 
     #[cfg(not(target_arch = "wasm32"))]
     {
-        let threads = std::thread::available_parallelism().map(|t| t.get()).unwrap_or(1).min(8);
+        // Within `par::with_threads`' cap: the odometry tracks on one core
+        // while the detection workers take the others.
+        let threads = crate::sift::par::threads();
         if threads > 1 && n >= 64 {
             let chunk = n.div_ceil(threads);
             std::thread::scope(|s| {
@@ -770,6 +799,31 @@ mod tests {
         assert!(worst < 0.01, "worst shift error {worst}");
         let mean = sum / (2 * pts.len()) as f64;
         assert!(mean < 0.005, "mean error {mean}");
+    }
+
+    #[test]
+    fn results_follow_the_callers_order_not_the_visiting_order() {
+        // The tracker visits points in bands of rows; each result must land
+        // at its own point's index, bit for bit what tracking it alone gives.
+        let prev = textured(320, 240, 0.0, 0.0);
+        let next = textured(320, 240, 1.3, -0.7);
+        let mut pts = Vec::new();
+        for k in 0..70u32 {
+            // Scattered, bottom-right first, with one point outside the image.
+            let x = 300.0 - ((k * 37) % 280) as f32 - 0.25 * (k % 4) as f32;
+            let y = 220.0 - ((k * 53) % 200) as f32 - 0.5 * (k % 3) as f32;
+            pts.push([x, y]);
+        }
+        pts[17] = [-30.0, 50.0];
+        let together = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
+        assert!(!together.status[17]);
+        assert!(together.status.iter().filter(|&&s| s).count() > 60);
+        for (i, p) in pts.iter().enumerate() {
+            let alone = calc_optical_flow_pyr_lk(&prev, &next, &[*p], &LkParams::default());
+            assert_eq!(together.next_pts[i].map(f32::to_bits), alone.next_pts[0].map(f32::to_bits), "point {i}");
+            assert_eq!(together.status[i], alone.status[0], "point {i}");
+            assert_eq!(together.err[i].to_bits(), alone.err[0].to_bits(), "point {i}");
+        }
     }
 
     #[test]
