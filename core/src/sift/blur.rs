@@ -152,12 +152,17 @@ fn row_filter(row: &[f32], kx: &[f32], padded: &mut [f32], dst: &mut [f32]) {
         // dependent FMAs each, a third of a KITTI row's time.
         let m = BLOCK.max(r).min(w - r);
         let edge = &mut padded[..m + 2 * r];
-        for (i, e) in edge.iter_mut().enumerate() {
-            *e = row[reflect101(i as isize - r as isize, w)];
+        // Pixels −r..m + r of the row: only the r before 0 are reflected
+        // (w > 2r, so −j reflects to j), the rest copied as one slice.
+        for (j, e) in edge[..r].iter_mut().enumerate() {
+            *e = row[r - j];
         }
+        edge[r..].copy_from_slice(&row[..m + r]);
         accumulate_row(edge, kx, &mut dst[..m]);
-        for (i, e) in edge.iter_mut().enumerate() {
-            *e = row[reflect101((w - m - r + i) as isize, w)];
+        // Pixels w − m − r..w + r: the r after w − 1 reflect to w − 2 − j.
+        edge[..m + r].copy_from_slice(&row[w - m - r..]);
+        for (j, e) in edge[m + r..].iter_mut().enumerate() {
+            *e = row[w - 2 - j];
         }
         accumulate_row(edge, kx, &mut dst[w - m..]);
     } else {
