@@ -133,13 +133,22 @@ impl Level {
         let stride = w + 2 * PAD;
         let ph = h + 2 * PAD;
         let mut padded = vec![0u8; stride * ph + SLACK];
-        let xs: Vec<usize> =
-            (0..stride).map(|x| reflect101(x as isize - PAD as isize, w)).collect();
+        // Only the PAD columns on each side are reflected; the row itself
+        // is one slice copy (a gather per pixel was 0.5 % of a VO run).
+        let (left, right): (Vec<usize>, Vec<usize>) = (0..PAD)
+            .map(|j| (reflect101(j as isize - PAD as isize, w), reflect101((w + j) as isize, w)))
+            .unzip();
         for py in 0..ph {
             let sy = reflect101(py as isize - PAD as isize, h);
             let src = &pixels[sy * w..(sy + 1) * w];
             let dst = &mut padded[py * stride..(py + 1) * stride];
-            for (d, &sx) in dst.iter_mut().zip(&xs) {
+            let (l, rest) = dst.split_at_mut(PAD);
+            let (mid, r) = rest.split_at_mut(w);
+            mid.copy_from_slice(src);
+            for (d, &sx) in l.iter_mut().zip(&left) {
+                *d = src[sx];
+            }
+            for (d, &sx) in r.iter_mut().zip(&right) {
                 *d = src[sx];
             }
         }
