@@ -312,10 +312,24 @@ pub fn gradient_samples(dxs: &[f32], dys: &[f32], w_args: &[f32]) -> (Vec<f32>, 
 /// The orientation (degrees) and magnitude of every gradient sample.
 #[inline(always)]
 pub fn gradient_directions(dxs: &[f32], dys: &[f32]) -> (Vec<f32>, Vec<f32>) {
+    let (mut oris, mut mags) = (Vec::new(), Vec::new());
+    gradient_directions_into(dxs, dys, &mut oris, &mut mags);
+    (oris, mags)
+}
+
+/// [`gradient_directions`] into buffers the caller reuses.
+#[inline(always)]
+pub fn gradient_directions_into(dxs: &[f32], dys: &[f32], oris: &mut Vec<f32>, mags: &mut Vec<f32>) {
     let len = dxs.len();
-    let (mut oris, mut mags) = (vec![0f32; len], vec![0f32; len]);
+    oris.clear();
+    oris.resize(len, 0.0);
+    mags.clear();
+    mags.resize(len, 0.0);
+    // Slices, so the loops below vectorise (through `&mut Vec` each store
+    // might move the buffer pointer, which is then reloaded every sample).
+    let (oris, mags) = (&mut oris[..], &mut mags[..]);
     #[cfg(target_arch = "wasm32")]
-    let done = x4::gradient_directions(dxs, dys, &mut oris, &mut mags);
+    let done = x4::gradient_directions(dxs, dys, oris, mags);
     #[cfg(not(target_arch = "wasm32"))]
     let done = 0;
     for k in done..len {
@@ -324,7 +338,6 @@ pub fn gradient_directions(dxs: &[f32], dys: &[f32]) -> (Vec<f32>, Vec<f32>) {
     for k in done..len {
         mags[k] = magnitude(dxs[k], dys[k]);
     }
-    (oris, mags)
 }
 
 /// WebAssembly has no autovectorised FMA (and [`fma`] there branches per

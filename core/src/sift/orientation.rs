@@ -4,7 +4,7 @@
 
 use super::extrema::Refined;
 use super::image::Plane;
-use super::num::{exp32f, fma, gradient_directions, rne, FLT_EPSILON};
+use super::num::{exp32f, fma, gradient_directions_into, rne, FLT_EPSILON};
 use super::{KeyPoint, SiftParams};
 
 const ORI_HIST_BINS: usize = 36;
@@ -42,28 +42,64 @@ pub fn push_oriented(gauss: &[Plane], refined: Refined, p: &SiftParams, out: &mu
     }
 }
 
+/// The buffers of one histogram, kept per thread between calls: a KITTI
+/// frame takes a few thousand histograms, and allocating six buffers for
+/// each was about 1 % of a VO run.
+#[derive(Default)]
+struct Scratch {
+    dxs: Vec<f32>,
+    dys: Vec<f32>,
+    wts: Vec<f32>,
+    weight_of: Vec<f32>,
+    weight_rows: Vec<f32>,
+    oris: Vec<f32>,
+    mags: Vec<f32>,
+}
+
+std::thread_local! {
+    static SCRATCH: std::cell::Cell<Scratch> = std::cell::Cell::new(Scratch::default());
+}
+
 /// The smoothed 36-bin histogram. `lanes` is the SIMD width OpenCV's
 /// dispatched kernel used: the first `len − len % lanes` samples add a
 /// rounded product, the scalar tail is FMA-contracted.
 #[inline(always)]
 fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize) -> [f32; 36] {
+    // Taken out and put back rather than borrowed in a closure: a closure
+    // would be compiled apart from this FMA-enabled body.
+    let mut s = SCRATCH.with(|cell| cell.take());
+    let h = orientation_hist_with(img, r, c, radius, sigma, lanes, &mut s);
+    SCRATCH.with(|cell| cell.set(s));
+    h
+}
+
+#[inline(always)]
+fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize, s: &mut Scratch) -> [f32; 36] {
     let expf_scale = -1.0 / ((2.0 * sigma) * sigma);
     let (rows, cols) = (img.height as i64, img.width as i64);
-    let cap = ((2 * radius + 1) * (2 * radius + 1)) as usize;
-    let mut dxs = Vec::with_capacity(cap);
-    let mut dys = Vec::with_capacity(cap);
-    let mut wts = Vec::with_capacity(cap);
+    let Scratch { dxs, dys, wts, weight_of, weight_rows, oris, mags } = s;
+    dxs.clear();
+    dys.clear();
+    wts.clear();
     prefetch_window(img, r, c, radius as usize + 1);
     // The Gaussian weight exp((i² + j²)·scale) of each distinct i² + j² once:
     // the same f32 argument gives the same weight, and a window has about a
     // sixth as many distinct distances as samples.
     let rr = radius.max(0) as usize;
-    let mut weight_of = vec![0f32; 2 * rr * rr + 1];
+    weight_of.clear();
+    weight_of.resize(2 * rr * rr + 1, 0.0);
     for i in 0..=rr {
         for j in i..=rr {
             let d2 = i * i + j * j;
             weight_of[d2] = exp32f((d2 as i32) as f32 * expf_scale);
         }
+    }
+    // Row |i| of the window's weights, j = −rr..=rr: each window row then
+    // copies its span (the rows for i and −i are the same).
+    let span = 2 * rr + 1;
+    weight_rows.clear();
+    for i in 0..=rr {
+        weight_rows.extend((0..span).map(|k| weight_of[i * i + (k as isize - rr as isize).pow(2) as usize]));
     }
     for i in -radius..=radius {
         let y = r as i64 + i as i64;
@@ -81,14 +117,15 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
         let (x0, x1) = ((c as i64 + j0) as usize, (c as i64 + j1) as usize + 1);
         dxs.extend(row[x0 + 1..x1 + 1].iter().zip(&row[x0 - 1..x1 - 1]).map(|(&a, &b)| a - b));
         dys.extend(up[x0..x1].iter().zip(&down[x0..x1]).map(|(&a, &b)| a - b));
-        let ii = i * i;
-        wts.extend((j0 as i32..=j1 as i32).map(|j| weight_of[(ii + j * j) as usize]));
+        let wrow = &weight_rows[i.unsigned_abs() as usize * span..][..span];
+        wts.extend_from_slice(&wrow[(j0 + rr as i64) as usize..=(j1 + rr as i64) as usize]);
     }
     let len = dxs.len();
     let simd_len = len - len % lanes;
     let mut t = [0f32; 36 + 4];
     // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
-    let (oris, mags) = gradient_directions(&dxs, &dys);
+    gradient_directions_into(dxs, dys, oris, mags);
+    let (wts, oris, mags) = (&wts[..], &oris[..], &mags[..]);
     for k in 0..len {
         let (wt, ori, mag) = (wts[k], oris[k], mags[k]);
         let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
