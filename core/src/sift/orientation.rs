@@ -126,7 +126,17 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
     // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
     gradient_directions_into(dxs, dys, oris, mags);
     let (wts, oris, mags) = (&wts[..], &oris[..], &mags[..]);
-    for k in 0..len {
+    #[cfg(target_arch = "x86_64")]
+    let first = if crate::simd::avx2_fma() {
+        // SAFETY: the CPU has the features the function is compiled for.
+        unsafe { x86::bin_products(wts, oris, mags, simd_len, &mut t) };
+        simd_len
+    } else {
+        0
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let first = 0;
+    for k in first..len {
         let (wt, ori, mag) = (wts[k], oris[k], mags[k]);
         let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
         if bin >= 36 {
@@ -189,4 +199,63 @@ fn prefetch_window(img: &Plane, r: usize, c: usize, reach: usize) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (img, r, c, reach);
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::*;
+
+    /// The histogram's first `n` samples (those OpenCV's SIMD loop takes:
+    /// a rounded product, then an add) into `t[2..38]`, with all 36 bins in
+    /// five vectors and each sample added to every bin, masked to 0.0 in
+    /// all but its own. x + 0.0 = x for every x here (sums of non-negative
+    /// products start at +0.0), so each bin sees exactly its samples' adds
+    /// in sample order, as in the scalar loop. That loop's read-add-write of
+    /// `t[bin]` made consecutive samples of one bin — the usual case, as
+    /// neighbouring gradients point alike — a chain through memory (about
+    /// 9 cycles a sample); here the chain is one vector add.
+    #[target_feature(enable = "avx2,fma")]
+    pub unsafe fn bin_products(wts: &[f32], oris: &[f32], mags: &[f32], n: usize, t: &mut [f32; 40]) {
+        assert!(n <= wts.len() && n <= oris.len() && n <= mags.len());
+        let ids: [__m256i; 5] = std::array::from_fn(|v| _mm256_add_epi32(_mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7), _mm256_set1_epi32(8 * v as i32)));
+        let mut h = [_mm256_setzero_ps(); 5];
+        let scale = _mm256_set1_ps(super::ORI_HIST_BINS as f32 / 360.0);
+        let (n36, zero) = (_mm256_set1_epi32(36), _mm256_setzero_si256());
+        let mut bins = [0i32; 8];
+        let mut prods = [0f32; 8];
+        let mut k = 0;
+        while k < n {
+            let m = (n - k).min(8);
+            // Eight samples' bins and products at once (a partial group
+            // computes lanes past n from zeros and ignores them).
+            let (o, wt, mg) = if m == 8 {
+                (_mm256_loadu_ps(oris.as_ptr().add(k)), _mm256_loadu_ps(wts.as_ptr().add(k)), _mm256_loadu_ps(mags.as_ptr().add(k)))
+            } else {
+                let mut a = [[0f32; 8]; 3];
+                a[0][..m].copy_from_slice(&oris[k..k + m]);
+                a[1][..m].copy_from_slice(&wts[k..k + m]);
+                a[2][..m].copy_from_slice(&mags[k..k + m]);
+                (_mm256_loadu_ps(a[0].as_ptr()), _mm256_loadu_ps(a[1].as_ptr()), _mm256_loadu_ps(a[2].as_ptr()))
+            };
+            // cvRound((n/360)·ori), then into 0..36 as the scalar loop does.
+            let mut b = _mm256_cvtps_epi32(_mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(_mm256_mul_ps(scale, o)));
+            b = _mm256_sub_epi32(b, _mm256_and_si256(_mm256_cmpgt_epi32(b, _mm256_sub_epi32(n36, _mm256_set1_epi32(1))), n36));
+            b = _mm256_add_epi32(b, _mm256_and_si256(_mm256_cmpgt_epi32(zero, b), n36));
+            _mm256_storeu_si256(bins.as_mut_ptr() as *mut __m256i, b);
+            _mm256_storeu_ps(prods.as_mut_ptr(), _mm256_mul_ps(wt, mg));
+            for j in 0..m {
+                let (bj, pj) = (_mm256_set1_epi32(bins[j]), _mm256_set1_ps(prods[j]));
+                for v in 0..5 {
+                    let hit = _mm256_castsi256_ps(_mm256_cmpeq_epi32(ids[v], bj));
+                    h[v] = _mm256_add_ps(h[v], _mm256_and_ps(hit, pj));
+                }
+            }
+            k += m;
+        }
+        let mut out = [0f32; 40];
+        for v in 0..5 {
+            _mm256_storeu_ps(out.as_mut_ptr().add(8 * v), h[v]);
+        }
+        t[2..38].copy_from_slice(&out[..36]);
+    }
 }
