@@ -86,8 +86,11 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
     // the same f32 argument gives the same weight, and a window has about a
     // sixth as many distinct distances as samples.
     let rr = radius.max(0) as usize;
-    weight_of.clear();
-    weight_of.resize(2 * rr * rr + 1, 0.0);
+    // Not cleared: every entry read below is written first, so a longer
+    // buffer's stale values are never seen (clearing was a memset a call).
+    if weight_of.len() < 2 * rr * rr + 1 {
+        weight_of.resize(2 * rr * rr + 1, 0.0);
+    }
     for i in 0..=rr {
         for j in i..=rr {
             let d2 = i * i + j * j;
