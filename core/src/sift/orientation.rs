@@ -256,8 +256,8 @@ mod x86 {
             k += m;
         }
         let mut out = [0f32; 40];
-        for v in 0..5 {
-            _mm256_storeu_ps(out.as_mut_ptr().add(8 * v), h[v]);
+        for (v, hv) in h.iter().enumerate() {
+            _mm256_storeu_ps(out.as_mut_ptr().add(8 * v), *hv);
         }
         t[2..38].copy_from_slice(&out[..36]);
     }
