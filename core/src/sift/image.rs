@@ -3,22 +3,41 @@
 use std::sync::Mutex;
 
 /// A row-major f32 image: one Gaussian level (or a scratch buffer).
-#[derive(Debug, PartialEq)]
+#[derive(Debug)]
 pub struct Plane {
     pub width: usize,
     pub height: usize,
     pub data: Vec<f32>,
+    /// How many floats of `data`'s buffer have been written (at least its
+    /// length), and the buffer's address: a spare buffer that held a
+    /// longer plane can be that long again without being filled first.
+    init: (usize, *const f32),
+}
+
+// SAFETY: the raw pointer is only compared, never dereferenced.
+unsafe impl Send for Plane {}
+unsafe impl Sync for Plane {}
+
+impl PartialEq for Plane {
+    fn eq(&self, other: &Self) -> bool {
+        (self.width, self.height) == (other.width, other.height) && self.data == other.data
+    }
 }
 
 impl Plane {
+    fn assemble(width: usize, height: usize, data: Vec<f32>, init: usize) -> Self {
+        let at = data.as_ptr();
+        Plane { width, height, data, init: (init, at) }
+    }
+
     /// A zeroed plane, its buffer taken from this thread's spare buffers
     /// when one is big enough.
     pub fn new(width: usize, height: usize) -> Self {
         let n = width * height;
-        let mut data = take_spare(n).unwrap_or_default();
+        let (mut data, init) = take_spare(n).unwrap_or_default();
         data.clear();
         data.resize(n, 0.0);
-        Plane { width, height, data }
+        Plane::assemble(width, height, data, init.max(n))
     }
 
     /// A plane whose every pixel the caller is about to write: a spare
@@ -26,13 +45,17 @@ impl Plane {
     /// the zeroing pass.
     pub fn for_overwrite(width: usize, height: usize) -> Self {
         let n = width * height;
-        let mut data = take_spare(n).unwrap_or_default();
-        if data.len() >= n {
-            data.truncate(n);
+        let (mut data, init) = take_spare(n).unwrap_or_default();
+        if init >= n {
+            // SAFETY: the buffer's first `init` floats were all written
+            // while it held an earlier plane (`init` only ever counts
+            // written floats), and nothing un-writes memory: f32 has no
+            // drop and every bit pattern is a valid f32.
+            unsafe { data.set_len(n) };
         } else {
             data.resize(n, 0.0);
         }
-        Plane { width, height, data }
+        Plane::assemble(width, height, data, init.max(n))
     }
 
     #[inline(always)]
@@ -71,10 +94,12 @@ impl Clone for Plane {
 const MAX_SPARE_BUFFERS: usize = 160;
 const MAX_SPARE_FLOATS: usize = 64 << 20; // 256 MB
 
-static SPARE: Mutex<Vec<Vec<f32>>> = Mutex::new(Vec::new());
+/// Spare buffers, each with how many of its floats have been written.
+static SPARE: Mutex<Vec<(Vec<f32>, usize)>> = Mutex::new(Vec::new());
 
-/// The smallest spare buffer holding at least `n` floats.
-fn take_spare(n: usize) -> Option<Vec<f32>> {
+/// The smallest spare buffer holding at least `n` floats, and how many of
+/// its floats have been written.
+fn take_spare(n: usize) -> Option<(Vec<f32>, usize)> {
     if n < 4096 {
         return None; // small planes: the allocator is fast enough
     }
@@ -82,8 +107,8 @@ fn take_spare(n: usize) -> Option<Vec<f32>> {
     let best = spare
         .iter()
         .enumerate()
-        .filter(|(_, b)| b.capacity() >= n)
-        .min_by_key(|(_, b)| b.capacity())
+        .filter(|(_, (b, _))| b.capacity() >= n)
+        .min_by_key(|(_, (b, _))| b.capacity())
         .map(|(i, _)| i)?;
     Some(spare.swap_remove(best))
 }
@@ -94,9 +119,13 @@ impl Drop for Plane {
             return;
         }
         if let Ok(mut spare) = SPARE.lock() {
-            let held: usize = spare.iter().map(Vec::capacity).sum();
+            let held: usize = spare.iter().map(|(b, _)| b.capacity()).sum();
             if spare.len() < MAX_SPARE_BUFFERS && held + self.data.capacity() <= MAX_SPARE_FLOATS {
-                spare.push(std::mem::take(&mut self.data));
+                // The count is the buffer's only while it is the same buffer.
+                let (init, at) = self.init;
+                let len = self.data.len();
+                let init = if at == self.data.as_ptr() && init <= self.data.capacity() { init.max(len) } else { len };
+                spare.push((std::mem::take(&mut self.data), init));
             }
         }
     }
