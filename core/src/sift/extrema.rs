@@ -3,7 +3,7 @@
 
 use super::image::Plane;
 use super::num::{fma, rne, rne64};
-use super::orientation::push_oriented;
+use super::orientation::{prefetch_histogram_window, push_oriented};
 use super::{KeyPoint, SiftParams};
 
 pub const IMG_BORDER: usize = 5;
@@ -70,6 +70,7 @@ pub fn scan_octave(gauss: &[Plane], o: usize, rows: std::ops::Range<usize>, p: &
     fill(&mut window, r_start);
     let mut candidates = Vec::new();
     let mut scratch = ColumnExtremes::default();
+    let mut pending: Option<Refined> = None;
     for r in r_start..r_end {
         fill(&mut window, r + 1);
         for layer in 1..=nl {
@@ -83,10 +84,19 @@ pub fn scan_octave(gauss: &[Plane], o: usize, rows: std::ops::Range<usize>, p: &
             row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates, &mut scratch);
             for &c in &candidates {
                 if let Some(refined) = adjust_local_extremum(levels, o, layer, r, c, p) {
-                    push_oriented(gauss, refined, p, out);
+                    // Each histogram is taken one keypoint late, so its
+                    // window's rows (most of them below the scan, not read
+                    // yet) arrive while the one before is counted.
+                    prefetch_histogram_window(gauss, &refined, p);
+                    if let Some(before) = pending.replace(refined) {
+                        push_oriented(gauss, before, p, out);
+                    }
                 }
             }
         }
+    }
+    if let Some(last) = pending {
+        push_oriented(gauss, last, p, out);
     }
 }
 

@@ -4,13 +4,21 @@
 
 use super::extrema::Refined;
 use super::image::Plane;
-use super::num::{exp32f, fma, gradient_directions_into, rne, FLT_EPSILON};
+use super::num::{exp32f_into, fma, gradient_directions_into, rne, FLT_EPSILON};
 use super::{KeyPoint, SiftParams};
 
 const ORI_HIST_BINS: usize = 36;
 const ORI_SIG_FCTR: f32 = 1.5;
 const ORI_RADIUS: f32 = 4.5;
 const ORI_PEAK_RATIO: f32 = 0.8;
+
+/// Asks for the rows of the window [`push_oriented`] will read for
+/// `refined`, ahead of it.
+pub fn prefetch_histogram_window(gauss: &[Plane], refined: &Refined, p: &SiftParams) {
+    let scl = refined.kp.size * 0.5 / (1u32 << refined.o) as f32;
+    let img = &gauss[refined.o * (p.n_octave_layers + 3) + refined.layer];
+    prefetch_window(img, refined.r, refined.c, rne(ORI_RADIUS * scl).max(0) as usize + 1);
+}
 
 /// Pushes one copy of the refined keypoint per qualifying histogram peak.
 pub fn push_oriented(gauss: &[Plane], refined: Refined, p: &SiftParams, out: &mut Vec<KeyPoint>) {
@@ -50,7 +58,7 @@ struct Scratch {
     dxs: Vec<f32>,
     dys: Vec<f32>,
     wts: Vec<f32>,
-    weight_of: Vec<f32>,
+    w_args: Vec<f32>,
     weight_rows: Vec<f32>,
     oris: Vec<f32>,
     mags: Vec<f32>,
@@ -77,33 +85,34 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
 fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize, s: &mut Scratch) -> [f32; 36] {
     let expf_scale = -1.0 / ((2.0 * sigma) * sigma);
     let (rows, cols) = (img.height as i64, img.width as i64);
-    let Scratch { dxs, dys, wts, weight_of, weight_rows, oris, mags } = s;
-    dxs.clear();
-    dys.clear();
-    wts.clear();
-    prefetch_window(img, r, c, radius as usize + 1);
-    // The Gaussian weight exp((i² + j²)·scale) of each distinct i² + j² once:
-    // the same f32 argument gives the same weight, and a window has about a
-    // sixth as many distinct distances as samples.
+    let Scratch { dxs, dys, wts, w_args, weight_rows, oris, mags } = s;
+    // Row |i| of the window's Gaussian weights exp((i² + j²)·scale),
+    // j = −rr..=rr, the rows for i and −i being the same: each window row
+    // then copies its span. The arguments first, then one pass of the
+    // exponential over them, eight lanes on AVX2 (one scalar exp per
+    // distinct distance, then a lookup per entry, was a third of this
+    // function).
     let rr = radius.max(0) as usize;
-    // Not cleared: every entry read below is written first, so a longer
-    // buffer's stale values are never seen (clearing was a memset a call).
-    if weight_of.len() < 2 * rr * rr + 1 {
-        weight_of.resize(2 * rr * rr + 1, 0.0);
-    }
+    let span = 2 * rr + 1;
+    w_args.clear();
     for i in 0..=rr {
-        for j in i..=rr {
-            let d2 = i * i + j * j;
-            weight_of[d2] = exp32f((d2 as i32) as f32 * expf_scale);
+        w_args.extend((0..span).map(|k| ((i * i + (k as isize - rr as isize).pow(2) as usize) as i32) as f32 * expf_scale));
+    }
+    // Eight floats of room after the last row (see the samples below).
+    weight_rows.clear();
+    weight_rows.resize(w_args.len() + 8, 0.0);
+    exp32f_into(w_args, &mut weight_rows[..w_args.len()]);
+    // The samples are written eight at a time, each row's last group
+    // running on into the next row's place (then overwritten) or the eight
+    // floats of room at the end: window rows are 19 to 33 samples, and
+    // their remainders taken one by one cost as much as the groups.
+    let room = span * span + 8;
+    for b in [&mut *dxs, &mut *dys, &mut *wts] {
+        if b.len() < room {
+            b.resize(room, 0.0);
         }
     }
-    // Row |i| of the window's weights, j = −rr..=rr: each window row then
-    // copies its span (the rows for i and −i are the same).
-    let span = 2 * rr + 1;
-    weight_rows.clear();
-    for i in 0..=rr {
-        weight_rows.extend((0..span).map(|k| weight_of[i * i + (k as isize - rr as isize).pow(2) as usize]));
-    }
+    let mut len = 0;
     for i in -radius..=radius {
         let y = r as i64 + i as i64;
         if y <= 0 || y >= rows - 1 {
@@ -118,17 +127,41 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
             continue;
         }
         let (x0, x1) = ((c as i64 + j0) as usize, (c as i64 + j1) as usize + 1);
-        dxs.extend(row[x0 + 1..x1 + 1].iter().zip(&row[x0 - 1..x1 - 1]).map(|(&a, &b)| a - b));
-        dys.extend(up[x0..x1].iter().zip(&down[x0..x1]).map(|(&a, &b)| a - b));
-        let wrow = &weight_rows[i.unsigned_abs() as usize * span..][..span];
-        wts.extend_from_slice(&wrow[(j0 + rr as i64) as usize..=(j1 + rr as i64) as usize]);
+        let n = x1 - x0;
+        let wrow = &weight_rows[i.unsigned_abs() as usize * span + (j0 + rr as i64) as usize..];
+        let groups = n.div_ceil(8);
+        if x0 + 8 * groups < row.len() {
+            for g in 0..groups {
+                let (o, x) = (len + 8 * g, x0 + 8 * g);
+                let (right, left) = (&row[x + 1..x + 9], &row[x - 1..x + 7]);
+                let (above, below) = (&up[x..x + 8], &down[x..x + 8]);
+                // Through arrays, so each group is one vector subtraction.
+                let (mut dx, mut dy) = ([0f32; 8], [0f32; 8]);
+                for l in 0..8 {
+                    dx[l] = right[l] - left[l];
+                    dy[l] = above[l] - below[l];
+                }
+                dxs[o..o + 8].copy_from_slice(&dx);
+                dys[o..o + 8].copy_from_slice(&dy);
+                wts[o..o + 8].copy_from_slice(&wrow[8 * g..8 * g + 8]);
+            }
+        } else {
+            // At the right edge of the image: one by one.
+            for k in 0..n {
+                let x = x0 + k;
+                dxs[len + k] = row[x + 1] - row[x - 1];
+                dys[len + k] = up[x] - down[x];
+                wts[len + k] = wrow[k];
+            }
+        }
+        len += n;
     }
-    let len = dxs.len();
+    let (dxs, dys, wts) = (&dxs[..len], &dys[..len], &wts[..len]);
     let simd_len = len - len % lanes;
     let mut t = [0f32; 36 + 4];
     // t[2..38] holds bins 0..35; t[0..2] and t[38..40] are the cyclic pads.
     gradient_directions_into(dxs, dys, oris, mags);
-    let (wts, oris, mags) = (&wts[..], &oris[..], &mags[..]);
+    let (oris, mags) = (&oris[..], &mags[..]);
     #[cfg(target_arch = "x86_64")]
     let first = if crate::simd::avx2_fma() {
         // SAFETY: the CPU has the features the function is compiled for.
