@@ -1,6 +1,7 @@
 //! `siftlab`: the lab's `run_odometry.py`, natively.
 
 fn main() {
+    in_huge_pages();
     keep_freed_memory();
     std::process::exit(siftlab_core::cli::main());
 }
@@ -32,5 +33,41 @@ fn keep_freed_memory() {
             mallopt(M_TRIM_THRESHOLD, 256 << 20);
             mallopt(M_TOP_PAD, 64 << 20);
         }
+    }
+}
+
+
+/// Runs the program again with glibc's allocator asking the kernel for
+/// transparent huge pages (`GLIBC_TUNABLES=glibc.malloc.hugetlb=1`, glibc
+/// 2.35 and later), unless it already does.
+///
+/// A SIFT frame's planes are 7.5 MB each and its passes read many rows of
+/// them at once (a blur's column pass 28 rows, an orientation histogram
+/// 35): rows 10 KB apart each sit in a page of their own, so in 4 KB pages
+/// nearly every row read is a TLB miss and a page walk. Kernels set to give
+/// huge pages only where asked (`transparent_hugepage=madvise`, this
+/// machine's and a common default) then need the allocator to ask, and only
+/// glibc's own tunable asks for its heaps before their first touch; a
+/// `madvise` on each large block as it is handed out came too late for the
+/// page holding glibc's block header and covered half as much. With it,
+/// `view_trajectory 99` holds 133 of its 141 MB in huge pages and takes
+/// 6 % less CPU time (median of 4 interleaved rounds). The tunable is read
+/// only at start-up, hence the `exec` (about a millisecond); if it fails,
+/// the program simply goes on as it is.
+fn in_huge_pages() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    {
+        use std::os::unix::process::CommandExt;
+        const TUNABLE: &str = "glibc.malloc.hugetlb";
+        let current = std::env::var("GLIBC_TUNABLES").unwrap_or_default();
+        if current.contains(TUNABLE) {
+            return;
+        }
+        let Ok(exe) = std::env::current_exe() else { return };
+        let tunables = if current.is_empty() { format!("{TUNABLE}=1") } else { format!("{current}:{TUNABLE}=1") };
+        let mut args = std::env::args_os();
+        let arg0 = args.next().unwrap_or_else(|| exe.clone().into_os_string());
+        // Returns only if the exec failed.
+        let _ = std::process::Command::new(&exe).arg0(arg0).args(args).env("GLIBC_TUNABLES", tunables).exec();
     }
 }
