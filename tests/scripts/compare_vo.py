@@ -11,8 +11,9 @@ alignment, GT scale as the lab uses it), the frame-by-frame distance between the
 (max / median / at the last frame), and frames per second (best of K, whole loop with image
 reading; ours includes process start-up) with the ratio ours / OpenCV, plus the ratio of each
 back-to-back round and their median (the figure to quote on a machine whose speed drifts).
-With --baseline (an older siftlab build) that binary runs in every round too, and the
-per-round speed-up of --binary over it is reported (and whether both estimates are equal).
+With --baseline (an older siftlab build) that binary runs in every round too (the two
+builds alternating which runs first after OpenCV), and the per-round speed-up of --binary
+over it is reported (and whether both estimates are equal).
 
 The dataset defaults to ../shared/data/MyKITTI when it exists, else target/synthkitti
 (generate it with tests/scripts/gen_synthkitti.py --out target/synthkitti).
@@ -87,15 +88,22 @@ def main():
     gt = [ref.gt_position(p) for p in ref.read_poses(dataset)[:frames]]
     t_cv, t_ours, t_base = [], [], []
     with tempfile.TemporaryDirectory() as tmp:
-        for _ in range(max(1, args.repeat)):
+        for round_no in range(max(1, args.repeat)):
             start = time.perf_counter()
             cv_pos, _rot, _ = ref.run(dataset, frames)
             t_cv.append(time.perf_counter() - start)
-            if args.baseline:
-                base_pos, elapsed, _ = run_ours(args.baseline, dataset, frames, tmp)
-                t_base.append(elapsed)
-            our_pos, elapsed, our_text = run_ours(args.binary, dataset, frames, tmp)
-            t_ours.append(elapsed)
+            # The two builds take turns at running right after OpenCV, so
+            # neither always gets the same place in the round.
+            builds = ["ours", "base"] if args.baseline else ["ours"]
+            if round_no % 2 == 1:
+                builds.reverse()
+            for build in builds:
+                if build == "base":
+                    base_pos, elapsed, _ = run_ours(args.baseline, dataset, frames, tmp)
+                    t_base.append(elapsed)
+                else:
+                    our_pos, elapsed, our_text = run_ours(args.binary, dataset, frames, tmp)
+                    t_ours.append(elapsed)
 
     diffs = [dist(a, b) for a, b in zip(our_pos, cv_pos)]
     res = {
