@@ -60,8 +60,20 @@ fn downsample(src: &Plane) -> Plane {
     let mut out = Plane::for_overwrite(w, h);
     for y in 0..h {
         let s = src.row(2 * y);
-        for (x, d) in out.row_mut(y).iter_mut().enumerate() {
-            *d = s[2 * x];
+        let d = out.row_mut(y);
+        // Eight output pixels from sixteen source pixels at a time (one at
+        // a time the loop waited on every fresh output line: 1.4 % of a VO
+        // profile, 1.0 % so), the rest one by one.
+        let groups = w / 8;
+        for (d8, s16) in d.chunks_exact_mut(8).zip(s.chunks_exact(16)) {
+            let mut v = [0f32; 8];
+            for (k, e) in v.iter_mut().enumerate() {
+                *e = s16[2 * k];
+            }
+            d8.copy_from_slice(&v);
+        }
+        for x in 8 * groups..w {
+            d[x] = s[2 * x];
         }
     }
     out
@@ -79,6 +91,25 @@ mod tests {
         assert_eq!(s[3], 1.9465878414647133);
         assert_eq!(s[4], 2.4525469969308156);
         assert_eq!(s[5], 3.090015587289591);
+    }
+
+    #[test]
+    fn downsample_takes_every_other_pixel_of_every_other_row() {
+        // Widths with and without a remainder after the groups of eight.
+        for (w, h) in [(21, 5), (32, 4), (7, 3), (2, 2)] {
+            let mut src = Plane::new(w, h);
+            for y in 0..h {
+                for (x, v) in src.row_mut(y).iter_mut().enumerate() {
+                    *v = (100 * y + x) as f32;
+                }
+            }
+            let d = downsample(&src);
+            assert_eq!((d.width, d.height), (w / 2, h / 2));
+            for y in 0..h / 2 {
+                let expected: Vec<f32> = (0..w / 2).map(|x| (200 * y + 2 * x) as f32).collect();
+                assert_eq!(d.row(y), &expected[..], "{w}x{h} row {y}");
+            }
+        }
     }
 
     #[test]
