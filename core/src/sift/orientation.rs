@@ -12,19 +12,23 @@ const ORI_SIG_FCTR: f32 = 1.5;
 const ORI_RADIUS: f32 = 4.5;
 const ORI_PEAK_RATIO: f32 = 0.8;
 
+/// The keypoint's scale in its octave's pixels, and its Gaussian level.
+fn scale_and_level<'g>(gauss: &'g [Plane], refined: &Refined, p: &SiftParams) -> (f32, &'g Plane) {
+    let scl = refined.kp.size * 0.5 / (1u32 << refined.o) as f32;
+    (scl, &gauss[refined.o * (p.n_octave_layers + 3) + refined.layer])
+}
+
 /// Asks for the rows of the window [`push_oriented`] will read for
 /// `refined`, ahead of it.
 pub fn prefetch_histogram_window(gauss: &[Plane], refined: &Refined, p: &SiftParams) {
-    let scl = refined.kp.size * 0.5 / (1u32 << refined.o) as f32;
-    let img = &gauss[refined.o * (p.n_octave_layers + 3) + refined.layer];
+    let (scl, img) = scale_and_level(gauss, refined, p);
     prefetch_window(img, refined.r, refined.c, rne(ORI_RADIUS * scl).max(0) as usize + 1);
 }
 
 /// Pushes one copy of the refined keypoint per qualifying histogram peak.
 pub fn push_oriented(gauss: &[Plane], refined: Refined, p: &SiftParams, out: &mut Vec<KeyPoint>) {
-    let Refined { kp, o, layer, r, c } = refined;
-    let scl = kp.size * 0.5 / (1u32 << o) as f32;
-    let img = &gauss[o * (p.n_octave_layers + 3) + layer];
+    let (scl, img) = scale_and_level(gauss, &refined, p);
+    let Refined { kp, r, c, .. } = refined;
     let (radius, sigma, lanes) = (rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
     let hist = crate::with_hw_fma!([f32; 36], orientation_hist(img, r, c, radius, sigma, lanes));
     let omax = hist.iter().copied().fold(hist[0], f32::max);
@@ -90,7 +94,7 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
     // j = −rr..=rr, the rows for i and −i being the same: each window row
     // then copies its span. The arguments first, then one pass of the
     // exponential over them, eight lanes on AVX2 (one scalar exp per
-    // distinct distance, then a lookup per entry, was a third of this
+    // distinct distance, then a lookup per entry, was a quarter of this
     // function).
     let rr = radius.max(0) as usize;
     let span = 2 * rr + 1;
