@@ -36,7 +36,6 @@ fn keep_freed_memory() {
     }
 }
 
-
 /// Runs the program again with glibc's allocator asking the kernel for
 /// transparent huge pages (`GLIBC_TUNABLES=glibc.malloc.hugetlb=1`, glibc
 /// 2.35 and later), unless it already does.
@@ -51,7 +50,8 @@ fn keep_freed_memory() {
 /// `madvise` on each large block as it is handed out came too late for the
 /// page holding glibc's block header and covered half as much. With it,
 /// `view_trajectory 99` holds 133 of its 141 MB in huge pages and takes
-/// 6 % less CPU time (median of 4 interleaved rounds). The tunable is read
+/// 3–4 % less CPU time (medians of 6 and of 8 interleaved rounds, the same
+/// binary with `glibc.malloc.hugetlb=0` against it). The tunable is read
 /// only at start-up, hence the `exec` (about a millisecond); if it fails,
 /// the program simply goes on as it is.
 fn in_huge_pages() {

@@ -622,8 +622,8 @@ mod tests {
     use super::*;
 
     /// The AVX2 `exp32f` against the scalar one, bit for bit, over the
-    /// arguments the orientation weights take (−d²/(2σ²) down to −2) and
-    /// beyond, both clamps included.
+    /// arguments the orientation weights take (−d²/(2σ²), down to about −9)
+    /// and far beyond, both clamps included.
     #[cfg(target_arch = "x86_64")]
     #[test]
     fn vector_exp32f_is_the_scalar_one() {
