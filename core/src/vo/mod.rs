@@ -9,6 +9,7 @@ pub mod five_point;
 pub mod linalg;
 pub mod lk;
 pub mod metrics;
+pub mod null_vectors;
 pub mod odometry;
 pub mod ransac;
 pub mod recover_pose;

@@ -3,7 +3,10 @@
 //! candidates in OpenCV's order, DLT triangulation and the cheirality /
 //! distance (50) votes of every point (the lab passes no mask).
 
-use super::linalg::{null_vector_4x4, svd};
+#[cfg(test)]
+use super::linalg::null_vector_4x4;
+use super::linalg::svd;
+use super::null_vectors::null_vectors_4x4;
 use super::{det3, mat_mul, Camera, Mat3, Vec3};
 use crate::{Error, Result};
 
@@ -53,8 +56,17 @@ pub fn decompose_essential(e: &Mat3) -> (Mat3, Mat3, Vec3) {
 /// the two vectors it mixes). So OpenCV's separate SVD gives exactly
 /// `±(X0, X1, X2, −X3)`, and its tests, which do not depend on the sign of X,
 /// come out as the negated quantities below: the same votes, bit for bit.
-#[inline]
+/// (`recover_pose_normalized` does the same, four SVDs at a time.)
+#[cfg(test)]
 fn votes_for(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> (bool, bool) {
+    let (m, p) = dlt(r, t, a, b);
+    votes_from(null_vector_4x4(&m), &p, dist)
+}
+
+/// The triangulation matrix of `a` ↔ `b` for `P0 = [I|0]` and `P = [R|t]`,
+/// and `P`.
+#[inline]
+fn dlt(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2]) -> ([[f64; 4]; 4], [[f64; 4]; 3]) {
     let (x1, y1, x2, y2) = (a[0], a[1], b[0], b[1]);
     let p: [[f64; 4]; 3] = std::array::from_fn(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
     let m = [
@@ -63,7 +75,12 @@ fn votes_for(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> (bool, 
         std::array::from_fn(|k| x2 * p[2][k] - p[0][k]),
         std::array::from_fn(|k| y2 * p[2][k] - p[1][k]),
     ];
-    let x = null_vector_4x4(&m);
+    (m, p)
+}
+
+/// The votes of [`votes_for`] from the null vector `x` of the DLT matrix.
+#[inline]
+fn votes_from(x: [f64; 4], p: &[[f64; 4]; 3], dist: f64) -> (bool, bool) {
     // OpenCV's `mask = X2·X3 > 0` then `Q /= Q.row(3)`: an X3 of 0 or NaN
     // fails this first test, so afterwards the fourth coordinate is exactly 1.
     // With −t: X2·(−X3), Q0..2 negated, and Z' = −(R·Q + t)_z exactly.
@@ -94,11 +111,17 @@ pub fn recover_pose_normalized(e: &Mat3, p1: &[[f64; 2]], p2: &[[f64; 2]], dist:
     let nt = [-t[0], -t[1], -t[2]];
     let cands: [(&Mat3, &Vec3); 4] = [(&r1, &t), (&r2, &t), (&r1, &nt), (&r2, &nt)];
     let mut masks: [Vec<bool>; 4] = std::array::from_fn(|_| Vec::with_capacity(p1.len()));
-    for (&a, &b) in p1.iter().zip(p2) {
-        for k in 0..2 {
-            let (plus, minus) = votes_for(cands[k].0, &t, a, b, dist);
-            masks[k].push(plus);
-            masks[k + 2].push(minus);
+    // Two points under both rotations are the four SVDs one call solves at
+    // once; an odd last point fills the other two lanes with itself.
+    type Lane = ([[f64; 4]; 4], [[f64; 4]; 3]);
+    for i in (0..p1.len()).step_by(2) {
+        let pair = [i, (i + 1).min(p1.len() - 1)];
+        let lanes: [Lane; 4] = std::array::from_fn(|l| dlt(cands[l % 2].0, &t, p1[pair[l / 2]], p2[pair[l / 2]]));
+        let xs = null_vectors_4x4(&lanes.map(|(m, _)| m));
+        for l in 0..if pair[0] == pair[1] { 2 } else { 4 } {
+            let (plus, minus) = votes_from(xs[l], &lanes[l].1, dist);
+            masks[l % 2].push(plus);
+            masks[l % 2 + 2].push(minus);
         }
     }
     let votes: [usize; 4] = std::array::from_fn(|k| masks[k].iter().filter(|&&m| m).count());
