@@ -438,6 +438,7 @@ fn xy_second_derivs(cur: Dog, r: usize, c: usize) -> (f32, f32, f32) {
     (dxx, dyy, dxy)
 }
 
+#[inline(always)]
 fn derivs(cur: Dog, prev: Dog, next: Dog, r: usize, c: usize) -> Derivs {
     let d = first_derivs(cur, prev, next, r, c);
     let (dxx, dyy, dxy) = xy_second_derivs(cur, r, c);
@@ -452,6 +453,7 @@ fn derivs(cur: Dog, prev: Dog, next: Dog, r: usize, c: usize) -> Derivs {
 
 /// `Matx33f::solve(DECOMP_LU)`: Cramer's rule with the common subexpressions
 /// and fusions GCC produced (spec §7). Returns the offsets (xc, xr, xi).
+#[inline(always)]
 fn solve_offsets(g: &Derivs) -> (f32, f32, f32) {
     let Derivs { d, dxx, dyy, dss, dxy, dxs, dys } = *g;
     let [d0, d1, d2] = d;
@@ -476,14 +478,15 @@ fn solve_offsets(g: &Derivs) -> (f32, f32, f32) {
 
 /// `adjustLocalExtrema`: up to five Newton steps, then the contrast and
 /// edge tests. `None` when OpenCV rejects the candidate.
-fn adjust_local_extremum(
-    levels: &[Plane],
-    o: usize,
-    layer0: usize,
-    r0: usize,
-    c0: usize,
-    p: &SiftParams,
-) -> Option<Refined> {
+///
+/// Compiled with FMA where the CPU has it: its two dozen `fma`s and
+/// roundings were calls to `fmaf` and `rintf` otherwise.
+fn adjust_local_extremum(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &SiftParams) -> Option<Refined> {
+    crate::with_hw_fma!(Option<Refined>, refine(levels, o, layer0, r0, c0, p))
+}
+
+#[inline(always)]
+fn refine(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &SiftParams) -> Option<Refined> {
     let nl = p.n_octave_layers;
     let (w, h) = (levels[0].width as i64, levels[0].height as i64);
     let border = IMG_BORDER as i64;
