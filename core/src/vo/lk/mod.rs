@@ -71,49 +71,100 @@ fn reflect101(mut p: isize, len: usize) -> usize {
 /// `cv::pyrDown` on 8-bit data, exact integer arithmetic: the 5×5 binomial
 /// kernel (sum 256) over reflect-101 of the source level, `+128 >> 8`.
 pub fn pyr_down(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, usize) {
-    let (dw, dh) = (w.div_ceil(2), h.div_ceil(2));
-    // Horizontal pass for every source row, kept as exact integers.
-    let cols: Vec<[usize; 5]> = (0..dw)
-        .map(|x| {
-            let c = 2 * x as isize;
-            [
-                reflect101(c - 2, w),
-                reflect101(c - 1, w),
-                reflect101(c, w),
-                reflect101(c + 1, w),
-                reflect101(c + 2, w),
-            ]
-        })
-        .collect();
-    let mut hrow = vec![0u32; dw * h];
+    #[cfg(target_arch = "x86_64")]
+    if crate::simd::avx2() && w >= 40 {
+        // SAFETY: the CPU has AVX2, the feature the function is compiled for.
+        return unsafe { x86::pyr_down_avx2(src, w, h) };
+    }
+    pyr_down_portable(src, w, h)
+}
+
+/// Every sum below fits 16 bits: a horizontal sum is at most 16·255 = 4080
+/// and a vertical one 16·4080 + 128 = 65,408.
+fn pyr_down_portable(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, usize) {
+    let dw = w.div_ceil(2);
+    let mut hrow = vec![0u16; dw * h];
     for y in 0..h {
-        let row = &src[y * w..(y + 1) * w];
-        let out = &mut hrow[y * dw..(y + 1) * dw];
-        for (o, c) in out.iter_mut().zip(&cols) {
-            *o = row[c[0]] as u32
-                + 4 * row[c[1]] as u32
-                + 6 * row[c[2]] as u32
-                + 4 * row[c[3]] as u32
-                + row[c[4]] as u32;
-        }
+        pyr_down_row_edges(&src[y * w..(y + 1) * w], &mut hrow[y * dw..(y + 1) * dw], 0..dw);
     }
+    pyr_down_columns(&hrow, dw, h)
+}
+
+/// Horizontal sums of the output columns `xs` of one row, reflect-101.
+#[inline(always)]
+fn pyr_down_row_edges(row: &[u8], out: &mut [u16], xs: std::ops::Range<usize>) {
+    let w = row.len();
+    for x in xs {
+        let c = 2 * x as isize;
+        let at = |d: isize| row[reflect101(c + d, w)] as u16;
+        out[x] = at(-2) + 4 * at(-1) + 6 * at(0) + 4 * at(1) + at(2);
+    }
+}
+
+/// The vertical pass over the horizontal sums, reflect-101 rows.
+#[inline(always)]
+fn pyr_down_columns(hrow: &[u16], dw: usize, h: usize) -> (Vec<u8>, usize, usize) {
+    let dh = h.div_ceil(2);
     let mut dst = vec![0u8; dw * dh];
-    for y in 0..dh {
+    for (y, out) in dst.chunks_exact_mut(dw).enumerate() {
         let r = 2 * y as isize;
-        let rows = [
-            reflect101(r - 2, h),
-            reflect101(r - 1, h),
-            reflect101(r, h),
-            reflect101(r + 1, h),
-            reflect101(r + 2, h),
-        ];
-        let [r0, r1, r2, r3, r4] = rows.map(|ry| &hrow[ry * dw..(ry + 1) * dw]);
-        for x in 0..dw {
+        let [r0, r1, r2, r3, r4] = [-2, -1, 0, 1, 2].map(|d| &hrow[reflect101(r + d, h) * dw..][..dw]);
+        for (x, o) in out.iter_mut().enumerate() {
             let s = r0[x] + 4 * r1[x] + 6 * r2[x] + 4 * r3[x] + r4[x];
-            dst[y * dw + x] = ((s + 128) >> 8) as u8;
+            *o = ((s + 128) >> 8) as u8;
         }
     }
-    (dst, dw, dh)
+    (dst, dw, h.div_ceil(2))
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use std::arch::x86_64::*;
+
+    /// [`super::pyr_down`] with AVX2: each row's interior columns sixteen at
+    /// a time (the even and odd source pixels of 32 bytes are the low and
+    /// high bytes of its sixteen 16-bit lanes), the vertical pass compiled
+    /// for AVX2. The same integers as the portable pass. Needs w ≥ 40.
+    #[target_feature(enable = "avx2")]
+    pub unsafe fn pyr_down_avx2(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, usize) {
+        let dw = w.div_ceil(2);
+        // Columns 1..=last read source pixels 2x − 2 ..= 2x + 2 inside the row.
+        let last = (w - 3) / 2;
+        let mut hrow = vec![0u16; dw * h];
+        let lo = _mm256_set1_epi16(0xff);
+        for y in 0..h {
+            let row = &src[y * w..(y + 1) * w];
+            let out = &mut hrow[y * dw..(y + 1) * dw];
+            super::pyr_down_row_edges(row, out, 0..1);
+            super::pyr_down_row_edges(row, out, last + 1..dw);
+            // Blocks of 16 columns from 1; the last block ends at `last`
+            // and overlaps the one before (recomputing the same sums).
+            let n = last;
+            let mut x = 1;
+            loop {
+                let x0 = if x + 16 > n + 1 { n + 1 - 16 } else { x };
+                // Source pixels 2x0 − 2 ..= 2x0 + 32, all inside the row:
+                // lane i of `a` holds pixels 2(x0 + i) − 2 and − 1, of `b`
+                // 2(x0 + i) and + 1, the high byte of `c` 2(x0 + i) + 2.
+                let p = row.as_ptr().add(2 * x0 - 2);
+                let a = _mm256_loadu_si256(p as *const __m256i);
+                let b = _mm256_loadu_si256(p.add(2) as *const __m256i);
+                let c = _mm256_loadu_si256(p.add(3) as *const __m256i);
+                let (em, om) = (_mm256_and_si256(a, lo), _mm256_srli_epi16::<8>(a));
+                let (e0, o0) = (_mm256_and_si256(b, lo), _mm256_srli_epi16::<8>(b));
+                let ep = _mm256_srli_epi16::<8>(c);
+                let fours = _mm256_slli_epi16::<2>(_mm256_add_epi16(om, o0));
+                let six = _mm256_add_epi16(_mm256_slli_epi16::<2>(e0), _mm256_slli_epi16::<1>(e0));
+                let s = _mm256_add_epi16(_mm256_add_epi16(em, ep), _mm256_add_epi16(fours, six));
+                _mm256_storeu_si256(out.as_mut_ptr().add(x0) as *mut __m256i, s);
+                if x0 + 16 > n {
+                    break;
+                }
+                x += 16;
+            }
+        }
+        super::pyr_down_columns(&hrow, dw, h)
+    }
 }
 
 /// One pyramid level stored with a PAD-pixel reflect-101 border, as
@@ -193,34 +244,52 @@ pub struct Deriv {
 
 impl Deriv {
     pub fn new(level: &Level) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if crate::simd::avx2() {
+            #[target_feature(enable = "avx2")]
+            unsafe fn avx2(level: &Level) -> Deriv {
+                Deriv::compute(level)
+            }
+            // SAFETY: the CPU has AVX2, the feature `avx2` is compiled for.
+            return unsafe { avx2(level) };
+        }
+        Deriv::compute(level)
+    }
+
+    /// In 16-bit lanes (compiled for AVX2 where the CPU has it, sixteen
+    /// columns at a time): every sum is within ±16·255 = ±4080.
+    #[inline(always)]
+    fn compute(level: &Level) -> Self {
         let (w, h) = (level.w, level.h);
         let img = &level.pixels;
         let stride = w + 2 * PAD;
         let mut ix = vec![0i16; stride * (h + 2 * PAD) + SLACK];
         let mut iy = vec![0i16; stride * (h + 2 * PAD) + SLACK];
-        let mut s = vec![0i32; w];
-        let mut d = vec![0i32; w];
+        let mut s = vec![0i16; w];
+        let mut d = vec![0i16; w];
         for y in 0..h {
             let up = &img[reflect101(y as isize - 1, h) * w..][..w];
             let mid = &img[y * w..][..w];
             let dn = &img[reflect101(y as isize + 1, h) * w..][..w];
-            for x in 0..w {
-                s[x] = 3 * up[x] as i32 + 10 * mid[x] as i32 + 3 * dn[x] as i32;
-                d[x] = dn[x] as i32 - up[x] as i32;
+            for ((((s, d), &u), &m), &n) in s.iter_mut().zip(d.iter_mut()).zip(up).zip(mid).zip(dn) {
+                *s = 3 * u as i16 + 10 * m as i16 + 3 * n as i16;
+                *d = n as i16 - u as i16;
             }
             let row = (y + PAD) * stride + PAD;
             let (rx, ry) = (&mut ix[row..row + w], &mut iy[row..row + w]);
             // Interior without index arithmetic (vectorizes), the two edge
             // columns with reflect-101.
-            for x in 1..w.saturating_sub(1) {
-                rx[x] = (s[x + 1] - s[x - 1]) as i16;
-                ry[x] = (3 * d[x - 1] + 10 * d[x] + 3 * d[x + 1]) as i16;
+            if w > 2 {
+                for (((rx, ry), s), d) in rx[1..w - 1].iter_mut().zip(&mut ry[1..w - 1]).zip(s.windows(3)).zip(d.windows(3)) {
+                    *rx = s[2] - s[0];
+                    *ry = 3 * d[0] + 10 * d[1] + 3 * d[2];
+                }
             }
             for x in [0, w - 1] {
                 let l = reflect101(x as isize - 1, w);
                 let r = reflect101(x as isize + 1, w);
-                rx[x] = (s[r] - s[l]) as i16;
-                ry[x] = (3 * d[l] + 10 * d[x] + 3 * d[r]) as i16;
+                rx[x] = s[r] - s[l];
+                ry[x] = 3 * d[l] + 10 * d[x] + 3 * d[r];
             }
         }
         Deriv { stride, ix, iy }
@@ -744,6 +813,47 @@ mod tests {
         GrayImage::new(w, h, data).unwrap()
     }
 
+    /// The pyrDown of the old per-pixel code: gathers through a column table.
+    fn pyr_down_reference(src: &[u8], w: usize, h: usize) -> Vec<u8> {
+        let (dw, dh) = (w.div_ceil(2), h.div_ceil(2));
+        let at = |x: isize, y: isize| src[reflect101(y, h) * w + reflect101(x, w)] as u32;
+        let k = [1, 4, 6, 4, 1];
+        let mut dst = vec![0u8; dw * dh];
+        for y in 0..dh {
+            for x in 0..dw {
+                let mut s = 0;
+                for (i, ky) in k.iter().enumerate() {
+                    let mut r = 0;
+                    for (j, kx) in k.iter().enumerate() {
+                        r += kx * at(2 * x as isize + j as isize - 2, 2 * y as isize + i as isize - 2);
+                    }
+                    s += ky * r;
+                }
+                dst[y * dw + x] = ((s + 128) >> 8) as u8;
+            }
+        }
+        dst
+    }
+
+    #[test]
+    fn pyr_down_fast_paths_match_the_definition() {
+        let mut s = 0x9e37_79b9u32;
+        for (w, h) in [(40, 3), (41, 4), (55, 9), (72, 21), (1241, 376), (621, 188), (311, 94), (7, 5), (1, 1), (2, 3)] {
+            let src: Vec<u8> = (0..w * h)
+                .map(|_| {
+                    s ^= s << 13;
+                    s ^= s >> 17;
+                    s ^= s << 5;
+                    // Extremes often, so every 16-bit sum reaches its bound.
+                    [0, 255, (s >> 8) as u8][(s % 3) as usize]
+                })
+                .collect();
+            let want = pyr_down_reference(&src, w, h);
+            assert_eq!(pyr_down(&src, w, h).0, want, "{w}x{h}");
+            assert_eq!(pyr_down_portable(&src, w, h).0, want, "{w}x{h} portable");
+        }
+    }
+
     #[test]
     fn pyr_down_matches_cv2() {
         // cv2.pyrDown(np.arange(35, dtype=np.uint8).reshape(5, 7) * 7)
@@ -762,6 +872,24 @@ mod tests {
         // 100x60 → 50x30 → next would be 25x15 (15 ≤ 21): maxLevel 1.
         let small = GrayImage::new(100, 60, vec![0; 6000]).unwrap();
         assert_eq!(build_pyramid(&small, 3).len(), 2);
+    }
+
+    #[test]
+    fn scharr_fast_path_matches_the_portable_one() {
+        let mut s = 0x2468_ace1u32;
+        for (w, h) in [(1241, 376), (156, 47), (3, 2), (2, 1)] {
+            let data: Vec<u8> = (0..w * h)
+                .map(|_| {
+                    s ^= s << 13;
+                    s ^= s >> 17;
+                    s ^= s << 5;
+                    [0, 255, (s >> 8) as u8][(s % 3) as usize]
+                })
+                .collect();
+            let lvl = Level::new(data, w, h);
+            let (fast, portable) = (Deriv::new(&lvl), Deriv::compute(&lvl));
+            assert!(fast.ix == portable.ix && fast.iy == portable.iy, "{w}x{h}");
+        }
     }
 
     #[test]
