@@ -237,11 +237,76 @@ unsafe fn load_patch(
         bxy.add(load(&p.ax[y]), load(&p.ay[y]));
     }
     let (xx, xy, yy, bxy) = (xx.acc(), xy.acc(), yy.acc(), bxy.acc());
-    (
-        wide::tensor_sum(&xx, &xx, &p.x, &p.x),
-        wide::tensor_sum(&xy, &bxy, &p.x, &p.y),
-        wide::tensor_sum(&yy, &yy, &p.y, &p.y),
-    )
+    let lanes_exact = xx.groups_exact() && bxy.groups_exact() && yy.groups_exact();
+    let tails_exact = xx.tail_exact() && bxy.tail_exact() && yy.tail_exact();
+    if lanes_exact && tails_exact {
+        return (
+            wide::tensor_sum(&xx, &xx, &p.x, &p.x),
+            wide::tensor_sum(&xy, &bxy, &p.x, &p.y),
+            wide::tensor_sum(&yy, &yy, &p.y, &p.y),
+        );
+    }
+    // Replayed, a tensor sum was a chain of 336 + 105 dependent f32 adds;
+    // the three replayed together in vectors run their chains side by side.
+    // Where a bound holds the replay equals the exact integer anyway.
+    let (lanes, tails) = tensor_sums_replay(&p.x, &p.y);
+    let sum = |k: usize| {
+        let l = lanes[k];
+        tails[k] + ((l[0] + l[2]) + (l[1] + l[3]))
+    };
+    (sum(0), sum(1), sum(2))
+}
+
+/// OpenCV's tensor lanes L0..L3 and tail sums S of ΣX², ΣXY and ΣY² (in
+/// that order), in OpenCV's order (`wide::tensor_lanes_replay`,
+/// `wide::tail_replay`), the three sums at once: each row's block products
+/// as i32, converted to f32 (rounding as OpenCV's conversion does), split
+/// into columns B..B+3 and B+4..B+7 and added to the lanes in column order;
+/// the tail's five columns as vectors (X², XY, Y², 0) added in order.
+#[target_feature(enable = "avx2")]
+unsafe fn tensor_sums_replay(x: &Win16, y: &Win16) -> ([[f32; 4]; 3], [f32; 3]) {
+    // Row layout positions B, B+1, .. hold columns B, B+4, B+1, B+5, ...
+    let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
+    let (mut lxx, mut lxy, mut lyy) = (_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps());
+    let mut tail = _mm_setzero_ps();
+    let products = |a: __m256i, b: __m256i| _mm256_permutevar8x32_ps(_mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b)), split);
+    for r in 0..WIN {
+        let (xr, yr) = (x[r].0.as_ptr(), y[r].0.as_ptr());
+        for block in [0, 8] {
+            let xv = _mm256_cvtepi16_epi32(_mm_loadu_si128(xr.add(block) as *const __m128i));
+            let yv = _mm256_cvtepi16_epi32(_mm_loadu_si128(yr.add(block) as *const __m128i));
+            let (pxx, pxy, pyy) = (products(xv, xv), products(xv, yv), products(yv, yv));
+            lxx = _mm_add_ps(_mm_add_ps(lxx, _mm256_castps256_ps128(pxx)), _mm256_extractf128_ps::<1>(pxx));
+            lxy = _mm_add_ps(_mm_add_ps(lxy, _mm256_castps256_ps128(pxy)), _mm256_extractf128_ps::<1>(pxy));
+            lyy = _mm_add_ps(_mm_add_ps(lyy, _mm256_castps256_ps128(pyy)), _mm256_extractf128_ps::<1>(pyy));
+        }
+        // Columns 16..23 (21..23 are scratch, never added).
+        let xv = _mm256_cvtepi16_epi32(_mm_loadu_si128(xr.add(16) as *const __m128i));
+        let yv = _mm256_cvtepi16_epi32(_mm_loadu_si128(yr.add(16) as *const __m128i));
+        let f = |a: __m256i, b: __m256i| _mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b));
+        let (fxx, fxy, fyy) = (f(xv, xv), f(xv, yv), f(yv, yv));
+        // Transposed: term vector c = (X²(c), XY(c), Y²(c), 0).
+        let zero = _mm256_setzero_ps();
+        let a = _mm256_unpacklo_ps(fxx, fxy); // xx0 xy0 xx1 xy1 | xx4 xy4 ..
+        let b = _mm256_unpacklo_ps(fyy, zero); // yy0 0 yy1 0 | yy4 0 ..
+        let c = _mm256_unpackhi_ps(fxx, fxy); // xx2 xy2 xx3 xy3 | ..
+        let d = _mm256_unpackhi_ps(fyy, zero);
+        let t0 = _mm256_shuffle_ps::<0b01_00_01_00>(a, b);
+        let t1 = _mm256_shuffle_ps::<0b11_10_11_10>(a, b);
+        let t2 = _mm256_shuffle_ps::<0b01_00_01_00>(c, d);
+        let t3 = _mm256_shuffle_ps::<0b11_10_11_10>(c, d);
+        for t in [t0, t1, t2, t3] {
+            tail = _mm_add_ps(tail, _mm256_castps256_ps128(t));
+        }
+        tail = _mm_add_ps(tail, _mm256_extractf128_ps::<1>(t0));
+    }
+    let mut out = [[0f32; 4]; 3];
+    for (o, l) in out.iter_mut().zip([lxx, lxy, lyy]) {
+        _mm_storeu_ps(o.as_mut_ptr(), l);
+    }
+    let mut t = [0f32; 4];
+    _mm_storeu_ps(t.as_mut_ptr(), tail);
+    (out, [t[0], t[1], t[2]])
 }
 
 /// OpenCV's T0..T3 (= P + Q: X of groups 0+2, Y of 0+2, X of 1+3, Y of
@@ -508,7 +573,7 @@ mod tests {
             seed ^= seed << 17;
             seed
         };
-        let (mut exact_seen, mut replay_seen) = (0, 0);
+        let (mut exact_seen, mut replay_seen, mut tensor_replays) = (0, 0, 0);
         for (noise, cases) in [(0u32, 400), (12, 400), (90, 400), (255, 200)] {
             let prev = level(w, h, noise, 1 + noise as u64);
             let next = level(w, h, noise, 7 + noise as u64);
@@ -523,6 +588,9 @@ mod tests {
                 let w1 = weights(frac(rnd()), frac(rnd()));
                 let a = Scalar::load_patch(&prev, &deriv, ix, iy, &w0, &mut sp);
                 let b = Avx2::load_patch(&prev, &deriv, ix, iy, &w0, &mut vp);
+                // Whether ΣX²'s tail went through the replay (its bound is itself).
+                let tail_xx: u64 = vp.x.iter().map(|r| r.0[16..WIN].iter().map(|&v| (v as i64 * v as i64) as u64).sum::<u64>()).sum();
+                tensor_replays += (tail_xx > EXACT) as usize;
                 assert_eq!(
                     [a.0.to_bits(), a.1.to_bits(), a.2.to_bits()],
                     [b.0.to_bits(), b.1.to_bits(), b.2.to_bits()],
@@ -578,5 +646,6 @@ mod tests {
             exact_seen > 100 && replay_seen > 100,
             "exact {exact_seen}, replayed {replay_seen}"
         );
+        assert!(tensor_replays > 100 && tensor_replays < 1300, "tensor replays {tensor_replays} of 1400");
     }
 }
