@@ -46,9 +46,37 @@ fn reflect101(mut p: isize, len: usize) -> usize {
     p as usize
 }
 
+/// A plane as the blur reads it: row by row, each row either stored or
+/// made on demand into a buffer (the pyramid base's vertical upsampling, so
+/// the upsampled plane never goes to memory).
+pub trait Rows: Sync {
+    fn width(&self) -> usize;
+    fn height(&self) -> usize;
+    /// Row `y`, from the plane or written into `buf` (`width` floats).
+    fn row<'a>(&'a self, y: usize, buf: &'a mut [f32]) -> &'a [f32];
+}
+
+impl Rows for Plane {
+    fn width(&self) -> usize {
+        self.width
+    }
+    fn height(&self) -> usize {
+        self.height
+    }
+    #[inline]
+    fn row<'a>(&'a self, y: usize, _buf: &'a mut [f32]) -> &'a [f32] {
+        Plane::row(self, y)
+    }
+}
+
 /// GaussianBlur(src, σ) with the same σ in x and y.
 pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
-    let (w, h) = (src.width, src.height);
+    gaussian_blur_rows(src, sigma)
+}
+
+/// [`gaussian_blur`] of a plane given by its rows.
+pub fn gaussian_blur_rows<R: Rows>(src: &R, sigma: f64) -> Plane {
+    let (w, h) = (src.width(), src.height());
     let kernel = gaussian_kernel(sigma);
     // A single row or column gets a size-1 kernel on that axis (OpenCV's
     // createGaussianKernels special case).
@@ -59,7 +87,10 @@ pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
         return out;
     }
     if kx.len() == 1 && ky.len() == 1 {
-        out.data.copy_from_slice(&src.data);
+        let mut buf = vec![0f32; w];
+        for (y, row) in out.data.chunks_exact_mut(w).enumerate() {
+            row.copy_from_slice(src.row(y, &mut buf));
+        }
         return out;
     }
     super::par::for_each_chunk(&mut out.data, w, |y0, chunk| blur_rows(src, &kx, &ky, y0, chunk));
@@ -75,8 +106,8 @@ pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
 /// KITTI first octave this took 2.5-4.8 ns a pixel per blur on one core,
 /// against 3.0-5.9 for bands of 1.5 MB run through by column strips of 1 KB,
 /// whose short strided runs the prefetchers followed badly (Zen 3).
-fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
-    let (w, h) = (src.width, src.height);
+fn blur_rows<R: Rows>(src: &R, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
+    let (w, h) = (src.width(), src.height());
     let (r, c) = (kx.len() / 2, ky.len() / 2);
     let n = out.len() / w;
     // Two output rows at a time where the kernel exists (see
@@ -87,6 +118,7 @@ fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
     let mut ring = super::image::Plane::for_overwrite(slots * w, 1);
     let ring = &mut ring.data;
     let mut padded = vec![0f32; w + 2 * r];
+    let mut made = vec![0f32; w];
     // Ring slot of source row v (v may lie outside the image: the column
     // filter's border rule reflects it, so the slot holds a reflected row).
     let slot = |v: isize| v.rem_euclid(slots as isize) as usize;
@@ -99,7 +131,7 @@ fn blur_rows(src: &Plane, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32]) {
     let mut fill = |ring: &mut [f32], tame: &mut [bool], v: isize| {
         let sl = slot(v);
         let dst = &mut ring[sl * w..(sl + 1) * w];
-        row_filter(src.row(reflect101(v, h)), kx, &mut padded, dst);
+        row_filter(src.row(reflect101(v, h), &mut made), kx, &mut padded, dst);
         #[cfg(target_arch = "wasm32")]
         {
             tame[sl] = tame_ky && wasm::tame(dst);

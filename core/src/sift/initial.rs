@@ -1,6 +1,6 @@
 //! `createInitialImage` with doubleImageSize = true (spec §2).
 
-use super::blur::gaussian_blur;
+use super::blur::{gaussian_blur_rows, Rows};
 use super::image::Plane;
 use crate::image::GrayImage;
 
@@ -11,46 +11,97 @@ pub fn initial_image(img: &GrayImage, sigma: f64) -> Plane {
     // Evaluated in f32 without FMA, as sift.dispatch.cpp is compiled for the
     // SSE3 baseline: 1.6f*1.6f rounds to 2.5600002f.
     let sig_diff = (s * s - 0.5f32 * 0.5f32 * 4.0f32).max(0.01f32).sqrt();
-    let up = upsample2x(img);
-    gaussian_blur(&up, sig_diff as f64)
+    gaussian_blur_rows(&Upsampled::new(img), sig_diff as f64)
+}
+
+/// The ×2 upsampled image for the blur: the horizontal pass stored, each
+/// output row's vertical blend made when the blur reads it. The upsampled
+/// plane (7.5 MB for a KITTI frame) was written once and read once; now its
+/// rows live in the blur's row buffer.
+struct Upsampled {
+    /// The horizontal pass: 2w × h.
+    tmp: Plane,
+}
+
+impl Upsampled {
+    fn new(img: &GrayImage) -> Self {
+        let (w, h) = (img.width(), img.height());
+        let w2 = 2 * w;
+        let mut tmp = Plane::for_overwrite(w2, h);
+        super::par::for_each_chunk(&mut tmp.data, w2, |y0, rows| {
+            for (dy, row) in rows.chunks_exact_mut(w2).enumerate() {
+                upsample_row(&img.data()[(y0 + dy) * w..(y0 + dy + 1) * w], row);
+            }
+        });
+        Upsampled { tmp }
+    }
+}
+
+impl Rows for Upsampled {
+    fn width(&self) -> usize {
+        self.tmp.width
+    }
+    fn height(&self) -> usize {
+        2 * self.tmp.height
+    }
+    fn row<'a>(&'a self, y: usize, buf: &'a mut [f32]) -> &'a [f32] {
+        let (a, b, f) = vertical_taps(y, self.tmp.height);
+        blend_rows(self.tmp.row(a), self.tmp.row(b), f, buf);
+        buf
+    }
+}
+
+/// Source rows and the weight of the second for output row `t` of `n`
+/// source rows: (left, right, weight of right).
+fn vertical_taps(t: usize, n: usize) -> (usize, usize, f32) {
+    let m = t / 2;
+    if t % 2 == 0 {
+        if m == 0 { (0, 0, 0.0) } else { (m - 1, m, 0.75) }
+    } else if m + 1 >= n {
+        (n - 1, n - 1, 0.0)
+    } else {
+        (m, m + 1, 0.25)
+    }
+}
+
+/// `d = ta·(1 − f) + tb·f` across a row (exact: multiples of 1/16 below 256).
+fn blend_rows(ta: &[f32], tb: &[f32], f: f32, d: &mut [f32]) {
+    #[inline(always)]
+    fn body(ta: &[f32], tb: &[f32], f: f32, d: &mut [f32]) {
+        for ((d, &a), &b) in d.iter_mut().zip(ta).zip(tb) {
+            *d = a * (1.0 - f) + b * f;
+        }
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        #[target_feature(enable = "avx2")]
+        unsafe fn avx2(ta: &[f32], tb: &[f32], f: f32, d: &mut [f32]) {
+            body(ta, tb, f, d)
+        }
+        if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2, the only feature `avx2` enables.
+            return unsafe { avx2(ta, tb, f, d) };
+        }
+    }
+    body(ta, tb, f, d)
 }
 
 /// INTER_LINEAR ×2 with the pixel-centre convention. Source coordinate of
 /// destination t is (t + 0.5)/2 − 0.5, so weights are (0.25, 0.75) with edge
 /// replication. All values are multiples of 1/16 below 256, so this is exact
-/// whatever implementation OpenCV dispatches to (IPP included).
+/// whatever implementation OpenCV dispatches to (IPP included). The horizontal
+/// pass ([`upsample_row`]) takes destination pixels 2m and 2m+1 from source
+/// pixels m−1, m and m+1, a row as one pass over source triples; the
+/// vertical pass is [`Upsampled`]'s rows.
+#[cfg(test)]
 fn upsample2x(img: &GrayImage) -> Plane {
-    let (w, h) = (img.width(), img.height());
-    let (w2, h2) = (2 * w, 2 * h);
-    let taps = |t: usize, n: usize| -> (usize, usize, f32) {
-        // (left, right, weight of right)
-        let m = t / 2;
-        if t % 2 == 0 {
-            if m == 0 { (0, 0, 0.0) } else { (m - 1, m, 0.75) }
-        } else if m + 1 >= n {
-            (n - 1, n - 1, 0.0)
-        } else {
-            (m, m + 1, 0.25)
-        }
-    };
-    // Horizontal pass: destination pixels 2m and 2m+1 both lie between
-    // source pixels m−1, m and m+1, so a row is one pass over source
-    // triples (vectorised; any order gives the same exact sums).
-    let mut tmp = Plane::for_overwrite(w2, h);
-    super::par::for_each_chunk(&mut tmp.data, w2, |y0, rows| {
-        for (dy, row) in rows.chunks_exact_mut(w2).enumerate() {
-            upsample_row(&img.data()[(y0 + dy) * w..(y0 + dy + 1) * w], row);
-        }
-    });
+    let up = Upsampled::new(img);
+    let (w2, h2) = (up.width(), up.height());
     let mut out = Plane::for_overwrite(w2, h2);
-    super::par::for_each_chunk(&mut out.data, w2, |y0, rows| {
-        for (dy, row) in rows.chunks_exact_mut(w2).enumerate() {
-            let (a, b, f) = taps(y0 + dy, h);
-            for ((d, &ta), &tb) in row.iter_mut().zip(tmp.row(a)).zip(tmp.row(b)) {
-                *d = ta * (1.0 - f) + tb * f;
-            }
-        }
-    });
+    for (y, row) in out.data.chunks_exact_mut(w2).enumerate() {
+        let (a, b, f) = vertical_taps(y, img.height());
+        blend_rows(up.tmp.row(a), up.tmp.row(b), f, row);
+    }
     out
 }
 
