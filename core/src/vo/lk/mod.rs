@@ -263,10 +263,17 @@ impl Deriv {
         let (w, h) = (level.w, level.h);
         let img = &level.pixels;
         let stride = w + 2 * PAD;
-        let mut ix = vec![0i16; stride * (h + 2 * PAD) + SLACK];
-        let mut iy = vec![0i16; stride * (h + 2 * PAD) + SLACK];
+        let len = stride * (h + 2 * PAD) + SLACK;
+        // Written front to back, each element once: the zero border, then
+        // per row its pixels and the border around them (zeroing both whole
+        // planes first was half this function's time).
+        let (mut ix, mut iy) = (Vec::with_capacity(len), Vec::with_capacity(len));
+        let (mut rx, mut ry) = (vec![0i16; w], vec![0i16; w]);
         let mut s = vec![0i16; w];
         let mut d = vec![0i16; w];
+        for p in [&mut ix, &mut iy] {
+            p.resize(PAD * stride + PAD, 0);
+        }
         for y in 0..h {
             let up = &img[reflect101(y as isize - 1, h) * w..][..w];
             let mid = &img[y * w..][..w];
@@ -275,8 +282,6 @@ impl Deriv {
                 *s = 3 * u as i16 + 10 * m as i16 + 3 * n as i16;
                 *d = n as i16 - u as i16;
             }
-            let row = (y + PAD) * stride + PAD;
-            let (rx, ry) = (&mut ix[row..row + w], &mut iy[row..row + w]);
             // Interior without index arithmetic (vectorizes), the two edge
             // columns with reflect-101.
             if w > 2 {
@@ -291,6 +296,15 @@ impl Deriv {
                 rx[x] = s[r] - s[l];
                 ry[x] = 3 * d[l] + 10 * d[x] + 3 * d[r];
             }
+            // This row, the right border, the next row's left border (or,
+            // after the last row, the bottom border and the slack).
+            for (p, r) in [(&mut ix, &rx), (&mut iy, &ry)] {
+                p.extend_from_slice(r);
+                p.resize(p.len() + 2 * PAD, 0);
+            }
+        }
+        for p in [&mut ix, &mut iy] {
+            p.resize(len, 0);
         }
         Deriv { stride, ix, iy }
     }
