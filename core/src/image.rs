@@ -78,6 +78,10 @@ impl GrayImage {
                 "the image is corrupt or truncated ({e}); re-export or re-download it"
             ))
         })?;
+        // A gray PNG (every KITTI frame) is already the pixels: no copy.
+        if let image::DynamicImage::ImageLuma8(g) = img {
+            return Ok(GrayImage { width: w as usize, height: h as usize, data: g.into_raw() });
+        }
         Ok(Self::from_dynamic(&img))
     }
 
