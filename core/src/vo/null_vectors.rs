@@ -371,13 +371,7 @@ mod tests {
     /// sweeps and rotations.
     #[test]
     fn four_lanes_are_four_scalar_svds() {
-        let mut s = 0x2545_f491_4f6c_dd1du64;
-        let mut rnd = move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        };
+        let mut rnd = crate::vo::testing::uniform(0x2545_f491_4f6c_dd1d);
         let mut kinds = [0usize; 4];
         for n in 0..20_000 {
             let ms: [[[f64; 4]; 4]; 4] = std::array::from_fn(|l| match (n + l) % 4 {
