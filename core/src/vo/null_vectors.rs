@@ -150,14 +150,19 @@ mod x86 {
         _mm256_loadu_pd(rs.as_ptr())
     }
 
+    /// Rows i < j of `m`, both mutable.
+    #[inline(always)]
+    fn split_pair(m: &mut [[__m256d; 4]; 4], i: usize, j: usize) -> (&mut [__m256d; 4], &mut [__m256d; 4]) {
+        let (lo, hi) = m.split_at_mut(j);
+        (&mut lo[i], &mut hi[0])
+    }
+
     /// `jacobi_impl` with m = n = n1 = 4 on four matrices, one a lane, then
     /// each lane's selection sort of the singular values to find which row
     /// of Vᵀ comes last. A lane whose sweep changes nothing would have left
     /// the scalar loop; here it goes on with the others, but a sweep that
     /// changed nothing leaves the state as it was, so it changes nothing
     /// again: the lane's values stay exactly the scalar ones.
-    // Pairs of rows i and j are indexed together, element by element.
-    #[allow(clippy::needless_range_loop)]
     #[target_feature(enable = "avx2")]
     pub unsafe fn null_vectors_avx2(ms: &[[[f64; 4]; 4]; 4]) -> [[f64; 4]; 4] {
         // at[i][k] = column i of A, element k; lane l = matrix l.
@@ -225,24 +230,26 @@ mod x86 {
                         (c, s) = (select(neg, cp, c), select(neg, sp, s));
                     }
                     let ms = _mm256_xor_pd(s, splat(-0.0));
+                    // (x, y) ← (c·x + s·y, −s·x + c·y) where the pair is
+                    // rotated; returns the rotated values.
+                    let rotate = |x: &mut __m256d, y: &mut __m256d| {
+                        let t0 = _mm256_add_pd(_mm256_mul_pd(c, *x), _mm256_mul_pd(s, *y));
+                        let t1 = _mm256_add_pd(_mm256_mul_pd(ms, *x), _mm256_mul_pd(c, *y));
+                        (*x, *y) = (select(skip, t0, *x), select(skip, t1, *y));
+                        (t0, t1)
+                    };
                     let (mut na, mut nb) = (zero, zero);
-                    for k in 0..4 {
-                        let (ai, aj) = (at[i][k], at[j][k]);
-                        let t0 = _mm256_add_pd(_mm256_mul_pd(c, ai), _mm256_mul_pd(s, aj));
-                        let t1 = _mm256_add_pd(_mm256_mul_pd(ms, ai), _mm256_mul_pd(c, aj));
-                        at[i][k] = select(skip, t0, ai);
-                        at[j][k] = select(skip, t1, aj);
+                    let (ati, atj) = split_pair(&mut at, i, j);
+                    for (x, y) in ati.iter_mut().zip(atj.iter_mut()) {
+                        let (t0, t1) = rotate(x, y);
                         na = _mm256_add_pd(na, _mm256_mul_pd(t0, t0));
                         nb = _mm256_add_pd(nb, _mm256_mul_pd(t1, t1));
                     }
                     w[i] = select(skip, na, a);
                     w[j] = select(skip, nb, b);
-                    for k in 0..4 {
-                        let (vi, vj) = (vt[i][k], vt[j][k]);
-                        let t0 = _mm256_add_pd(_mm256_mul_pd(c, vi), _mm256_mul_pd(s, vj));
-                        let t1 = _mm256_add_pd(_mm256_mul_pd(ms, vi), _mm256_mul_pd(c, vj));
-                        vt[i][k] = select(skip, t0, vi);
-                        vt[j][k] = select(skip, t1, vj);
+                    let (vti, vtj) = split_pair(&mut vt, i, j);
+                    for (x, y) in vti.iter_mut().zip(vtj.iter_mut()) {
+                        rotate(x, y);
                     }
                     changed |= !skip_bits & 0b1111;
                 }
