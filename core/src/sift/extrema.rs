@@ -329,6 +329,12 @@ mod x86 {
             column(w - 8);
         }
         let (hi, lo) = (_mm256_set1_ps(thr), _mm256_set1_ps(-thr));
+        // Room for a hit in every column, so the loop writes hits through a
+        // pointer: with `push` (which may call the allocator) in it, the
+        // loop's pointers and thresholds were reloaded from the stack on
+        // every block.
+        out.reserve(cols.end - cols.start);
+        let (hits, mut n) = (out.as_mut_ptr(), out.len());
         let mut x = cols.start;
         while x + 8 <= cols.end {
             let v = _mm256_loadu_ps(p[4].add(x));
@@ -341,11 +347,15 @@ mod x86 {
             );
             let mut mask = _mm256_movemask_ps(hit) as u32;
             while mask != 0 {
-                out.push(x + mask.trailing_zeros() as usize);
+                hits.add(n).write(x + mask.trailing_zeros() as usize);
+                n += 1;
                 mask &= mask - 1;
             }
             x += 8;
         }
+        // SAFETY: the first n entries are written (n − len ≤ the columns
+        // examined ≤ the room reserved).
+        out.set_len(n);
         x
     }
 }
