@@ -101,9 +101,9 @@ pub fn scan_octave(gauss: &[Plane], o: usize, rows: std::ops::Range<usize>, p: &
 /// rows are read side by side in one pass, each once, so their memory
 /// streams run together rather than two at a time.
 fn differences(levels: &[Plane], y: usize, window: &mut Plane) {
-    let w = window.width;
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx2() && levels.len() == 6 && window.height >= 15 && levels.iter().all(|l| l.width == w && y < l.height) {
+    if crate::simd::avx2() && levels.len() == 6 && window.height >= 15 && levels.iter().all(|l| l.width == window.width && y < l.height) {
+        let w = window.width;
         let g: [*const f32; 6] = std::array::from_fn(|k| levels[k].row(y).as_ptr());
         let base = window.data.as_mut_ptr();
         // SAFETY: distinct window rows (3j + y % 3 < 15), each w floats.
@@ -198,6 +198,7 @@ fn row_extrema_generic(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize
 /// 3×3×3 maximum and minimum.
 #[cfg(target_arch = "x86_64")]
 mod x86 {
+    use std::arch::x86_64::*;
 
     /// [`super::differences`] for six Gaussian rows, eight columns at a
     /// time (a last block overlapping the one before).
@@ -226,7 +227,6 @@ mod x86 {
             block(w - 8);
         }
     }
-    use std::arch::x86_64::*;
 
     /// Returns the first column not examined (the scalar tail starts there).
     /// Needs every row to extend one pixel past `cols.end` and `cols.start >= 1`.
