@@ -104,8 +104,7 @@ fn pyr_down_row_edges(row: &[u8], out: &mut [u16], xs: std::ops::Range<usize>) {
 /// The vertical pass over the horizontal sums, reflect-101 rows.
 #[inline(always)]
 fn pyr_down_columns(hrow: &[u16], dw: usize, h: usize) -> (Vec<u8>, usize, usize) {
-    let dh = h.div_ceil(2);
-    let mut dst = vec![0u8; dw * dh];
+    let mut dst = vec![0u8; dw * h.div_ceil(2)];
     for (y, out) in dst.chunks_exact_mut(dw).enumerate() {
         let r = 2 * y as isize;
         let [r0, r1, r2, r3, r4] = [-2, -1, 0, 1, 2].map(|d| &hrow[reflect101(r + d, h) * dw..][..dw]);
@@ -139,10 +138,9 @@ mod x86 {
             super::pyr_down_row_edges(row, out, last + 1..dw);
             // Blocks of 16 columns from 1; the last block ends at `last`
             // and overlaps the one before (recomputing the same sums).
-            let n = last;
             let mut x = 1;
             loop {
-                let x0 = if x + 16 > n + 1 { n + 1 - 16 } else { x };
+                let x0 = x.min(last + 1 - 16);
                 // Source pixels 2x0 − 2 ..= 2x0 + 32, all inside the row:
                 // lane i of `a` holds pixels 2(x0 + i) − 2 and − 1, of `b`
                 // 2(x0 + i) and + 1, the high byte of `c` 2(x0 + i) + 2.
@@ -157,7 +155,7 @@ mod x86 {
                 let six = _mm256_add_epi16(_mm256_slli_epi16::<2>(e0), _mm256_slli_epi16::<1>(e0));
                 let s = _mm256_add_epi16(_mm256_add_epi16(em, ep), _mm256_add_epi16(fours, six));
                 _mm256_storeu_si256(out.as_mut_ptr().add(x0) as *mut __m256i, s);
-                if x0 + 16 > n {
+                if x0 + 16 > last {
                     break;
                 }
                 x += 16;
