@@ -127,6 +127,14 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
             continue;
         }
         let (up, row, down) = (img.row(y as usize - 1), img.row(y as usize), img.row(y as usize + 1));
+        // The window's row AHEAD rows further down, asked for now: the
+        // keypoint-ahead prefetch (`prefetch_histogram_window`) alone left
+        // a third of this function's time on the first load of each
+        // window's bottom row (6.7 → 5.2 % of a VO profile with both).
+        let ahead = y as usize + 1 + AHEAD;
+        if ahead < img.height {
+            prefetch_span(img.row(ahead), c.saturating_sub(rr + 1), c + rr + 8);
+        }
         // The columns with both horizontal neighbours inside the image, as
         // OpenCV's per-sample test keeps them, taken as one slice.
         let j0 = (-radius as i64).max(1 - c as i64);
@@ -179,7 +187,7 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
         0
     };
     #[cfg(not(target_arch = "x86_64"))]
-    let first = 0;
+    let (first, _) = (0, (offsets, prods));
     for k in first..len {
         let (wt, ori, mag) = (wts[k], oris[k], mags[k]);
         let mut bin = rne((ORI_HIST_BINS as f32 / 360.0) * ori);
@@ -219,30 +227,38 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
 /// histogram).
 #[inline(always)]
 fn prefetch_window(img: &Plane, r: usize, c: usize, reach: usize) {
+    if img.width == 0 || img.height == 0 {
+        return;
+    }
+    let (y0, y1) = (r.saturating_sub(reach), (r + reach).min(img.height - 1));
+    for y in y0..=y1 {
+        prefetch_span(img.row(y), c.saturating_sub(reach), c + reach);
+    }
+}
+
+/// How many rows below the one being read the gradient loop asks for.
+const AHEAD: usize = 8;
+
+/// Asks for the cache lines of `row[x0..=x1]` (x1 clamped to the row).
+#[inline(always)]
+fn prefetch_span(row: &[f32], x0: usize, x1: usize) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-        if img.width == 0 || img.height == 0 {
-            return;
-        }
-        let (y0, y1) = (r.saturating_sub(reach), (r + reach).min(img.height - 1));
-        let (x0, x1) = (c.saturating_sub(reach), (c + reach).min(img.width - 1));
-        for y in y0..=y1 {
-            let row = img.row(y);
-            // One prefetch per 64-byte line the row's span touches.
-            let mut x = x0;
-            loop {
-                // SAFETY: a prefetch of an address inside the row never faults.
-                unsafe { _mm_prefetch::<_MM_HINT_T0>(row.as_ptr().add(x).cast()) };
-                if x >= x1 {
-                    break;
-                }
-                x = (x + 16).min(x1);
+        let x1 = x1.min(row.len().saturating_sub(1));
+        // One prefetch per 64-byte line the span touches.
+        let mut x = x0;
+        while x <= x1 {
+            // SAFETY: a prefetch of an address inside the row never faults.
+            unsafe { _mm_prefetch::<_MM_HINT_T0>(row.as_ptr().add(x).cast()) };
+            if x == x1 {
+                break;
             }
+            x = (x + 16).min(x1);
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = (img, r, c, reach);
+    let _ = (row, x0, x1);
 }
 
 #[cfg(target_arch = "x86_64")]
