@@ -431,9 +431,6 @@ fn out_of_bounds(ix: i32, iy: i32, w: usize, h: usize) -> bool {
     ix < -(WIN as i32) || ix >= w as i32 || iy < -(WIN as i32) || iy >= h as i32
 }
 
-/// One level for one point (LKTrackerInvoker::operator()). `next` holds the
-/// stored estimate, updated in place; `status`/`err` are only touched at
-/// level 0.
 /// The window kernels of one point and level. [`Scalar`] is the reference
 /// (and what wasm without SIMD runs); `avx2::Avx2` and `simd128::Simd128` keep
 /// 16-bit windows in the column layout of `wide` and get the same bits.
@@ -509,90 +506,153 @@ struct Scratch {
     warped: Win,
 }
 
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn track_point<K: Kernels>(
-    prev: &Level,
-    deriv: &Deriv,
-    next_lvl: &Level,
-    prev_pt: [f32; 2],
-    next: &mut [f32; 2],
-    status: &mut bool,
-    err: &mut f32,
+/// One point at one level (LKTrackerInvoker::operator()), as a state that
+/// advances one iteration at a time, so that [`run_job_body`] can keep two
+/// points going side by side. `next` holds the stored estimate, updated in
+/// place; `status`/`err` are only touched at level 0.
+struct Track {
+    /// Index of the point in the job's output slices.
+    k: usize,
+    a11: f32,
+    a12: f32,
+    a22: f32,
+    dinv: f32,
+    /// Window corner of the current estimate (`next − HALF_WIN`).
+    n: [f32; 2],
+    prev_delta: [f32; 2],
+    /// Iterations done.
+    j: usize,
+}
+
+/// What a level of one point needs from its job.
+struct LevelCtx<'a> {
+    prev: &'a Level,
+    deriv: &'a Deriv,
+    next: &'a Level,
     level: usize,
     max_level: usize,
     crit: (usize, f64),
     min_eig_threshold: f32,
-    patch: &mut K::Patch,
-) {
-    let scale = 1.0 / (1u32 << level) as f32;
-    let p = [prev_pt[0] * scale, prev_pt[1] * scale];
-    let guess = if level == max_level { p } else { [next[0] * 2.0, next[1] * 2.0] };
-    *next = guess;
+}
 
-    let q = [p[0] - HALF_WIN, p[1] - HALF_WIN];
-    let (ix, iy) = (q[0].floor() as i32, q[1].floor() as i32);
-    if out_of_bounds(ix, iy, prev.w, prev.h) {
-        if level == 0 {
-            *status = false;
-            *err = 0.0;
-        }
-        return;
-    }
-    let wts = weights(q[0] - ix as f32, q[1] - iy as f32);
-    let (s11, s12, s22) = K::load_patch(prev, deriv, ix, iy, &wts, patch);
-    let (a11, a12, a22) = (s11 * FLT_SCALE, s12 * FLT_SCALE, s22 * FLT_SCALE);
-    let det = a11 * a22 - a12 * a12;
-    let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt())
-        / (2 * WIN * WIN) as f32;
-    if min_eig < min_eig_threshold || det < f32::EPSILON {
-        if level == 0 {
-            *status = false;
-        }
-        return;
-    }
-    let dinv = 1.0 / det;
+impl Track {
+    /// The guess, the template window and the structure tensor; `None` when
+    /// the point is done at this level before any iteration.
+    #[inline(always)]
+    fn start<K: Kernels>(
+        cx: &LevelCtx,
+        k: usize,
+        prev_pt: [f32; 2],
+        next: &mut [f32; 2],
+        status: &mut bool,
+        err: &mut f32,
+        patch: &mut K::Patch,
+    ) -> Option<Track> {
+        let level = cx.level;
+        let scale = 1.0 / (1u32 << level) as f32;
+        let p = [prev_pt[0] * scale, prev_pt[1] * scale];
+        let guess = if level == cx.max_level { p } else { [next[0] * 2.0, next[1] * 2.0] };
+        *next = guess;
 
-    let mut n = [guess[0] - HALF_WIN, guess[1] - HALF_WIN];
-    let mut prev_delta = [0f32; 2];
-    let (max_count, eps2) = crit;
-    for j in 0..max_count {
-        let (jx, jy) = (n[0].floor() as i32, n[1].floor() as i32);
-        if out_of_bounds(jx, jy, next_lvl.w, next_lvl.h) {
+        let q = [p[0] - HALF_WIN, p[1] - HALF_WIN];
+        let (ix, iy) = (q[0].floor() as i32, q[1].floor() as i32);
+        if out_of_bounds(ix, iy, cx.prev.w, cx.prev.h) {
+            if level == 0 {
+                *status = false;
+                *err = 0.0;
+            }
+            return None;
+        }
+        let wts = weights(q[0] - ix as f32, q[1] - iy as f32);
+        let (s11, s12, s22) = K::load_patch(cx.prev, cx.deriv, ix, iy, &wts, patch);
+        let (a11, a12, a22) = (s11 * FLT_SCALE, s12 * FLT_SCALE, s22 * FLT_SCALE);
+        let det = a11 * a22 - a12 * a12;
+        let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt())
+            / (2 * WIN * WIN) as f32;
+        if min_eig < cx.min_eig_threshold || det < f32::EPSILON {
             if level == 0 {
                 *status = false;
             }
-            break;
+            return None;
         }
-        let w = weights(n[0] - jx as f32, n[1] - jy as f32);
-        let (b1, b2) = K::mismatch(next_lvl, jx, jy, &w, patch);
-        let delta = [(a12 * b2 - a22 * b1) * dinv, (a12 * b1 - a11 * b2) * dinv];
-        n = [n[0] + delta[0], n[1] + delta[1]];
-        *next = [n[0] + HALF_WIN, n[1] + HALF_WIN];
-        if (delta[0] as f64) * (delta[0] as f64) + (delta[1] as f64) * (delta[1] as f64) <= eps2 {
-            break;
+        let track = Track {
+            k,
+            a11,
+            a12,
+            a22,
+            dinv: 1.0 / det,
+            n: [guess[0] - HALF_WIN, guess[1] - HALF_WIN],
+            prev_delta: [0.0; 2],
+            j: 0,
+        };
+        if cx.crit.0 == 0 {
+            track.finish::<K>(cx, next, status, err, patch);
+            return None;
         }
-        if j > 0
-            && ((delta[0] + prev_delta[0]).abs() as f64) < 0.01
-            && ((delta[1] + prev_delta[1]).abs() as f64) < 0.01
-        {
-            // The step reversed itself: retreat half of it and stop.
-            *next = [next[0] - delta[0] * 0.5, next[1] - delta[1] * 0.5];
-            break;
-        }
-        prev_delta = delta;
+        Some(track)
     }
 
-    if *status && level == 0 {
-        let m = [next[0] - HALF_WIN, next[1] - HALF_WIN];
-        let (jx, jy) = (m[0].floor() as i32, m[1].floor() as i32);
-        if out_of_bounds(jx, jy, next_lvl.w, next_lvl.h) {
-            *status = false;
-            return;
+    /// One iteration; false when the point is done at this level (then
+    /// [`Track::finish`] has run).
+    #[inline(always)]
+    fn step<K: Kernels>(
+        &mut self,
+        cx: &LevelCtx,
+        next: &mut [f32; 2],
+        status: &mut bool,
+        err: &mut f32,
+        patch: &mut K::Patch,
+    ) -> bool {
+        let n = self.n;
+        let (jx, jy) = (n[0].floor() as i32, n[1].floor() as i32);
+        let go_on = if out_of_bounds(jx, jy, cx.next.w, cx.next.h) {
+            if cx.level == 0 {
+                *status = false;
+            }
+            false
+        } else {
+            let w = weights(n[0] - jx as f32, n[1] - jy as f32);
+            let (b1, b2) = K::mismatch(cx.next, jx, jy, &w, patch);
+            let (a11, a12, a22, dinv) = (self.a11, self.a12, self.a22, self.dinv);
+            let delta = [(a12 * b2 - a22 * b1) * dinv, (a12 * b1 - a11 * b2) * dinv];
+            self.n = [n[0] + delta[0], n[1] + delta[1]];
+            *next = [self.n[0] + HALF_WIN, self.n[1] + HALF_WIN];
+            let prev_delta = self.prev_delta;
+            if (delta[0] as f64) * (delta[0] as f64) + (delta[1] as f64) * (delta[1] as f64) <= cx.crit.1 {
+                false
+            } else if self.j > 0
+                && ((delta[0] + prev_delta[0]).abs() as f64) < 0.01
+                && ((delta[1] + prev_delta[1]).abs() as f64) < 0.01
+            {
+                // The step reversed itself: retreat half of it and stop.
+                *next = [next[0] - delta[0] * 0.5, next[1] - delta[1] * 0.5];
+                false
+            } else {
+                self.prev_delta = delta;
+                self.j += 1;
+                self.j < cx.crit.0
+            }
+        };
+        if !go_on {
+            self.finish::<K>(cx, next, status, err, patch);
         }
-        let w = weights(m[0] - jx as f32, m[1] - jy as f32);
-        let errval = K::abs_diff_sum(next_lvl, jx, jy, &w, patch);
-        *err = errval / (32 * WIN * WIN) as f32;
+        go_on
+    }
+
+    /// The error of a point still tracked after level 0.
+    #[inline(always)]
+    fn finish<K: Kernels>(&self, cx: &LevelCtx, next: &[f32; 2], status: &mut bool, err: &mut f32, patch: &mut K::Patch) {
+        if *status && cx.level == 0 {
+            let m = [next[0] - HALF_WIN, next[1] - HALF_WIN];
+            let (jx, jy) = (m[0].floor() as i32, m[1].floor() as i32);
+            if out_of_bounds(jx, jy, cx.next.w, cx.next.h) {
+                *status = false;
+                return;
+            }
+            let w = weights(m[0] - jx as f32, m[1] - jy as f32);
+            let errval = K::abs_diff_sum(cx.next, jx, jy, &w, patch);
+            *err = errval / (32 * WIN * WIN) as f32;
+        }
     }
 }
 
@@ -607,17 +667,48 @@ struct Job<'a> {
     scalar: bool,
 }
 
+/// Every level of the job's points, two points at a time: a point's
+/// iterations form one chain (each window is placed by the previous
+/// iteration's result), and the end of an iteration — the sums' reduction,
+/// the step, the next window's weights and address — is a short serial
+/// stretch the vector units sit out. With a second point's iteration next
+/// in program order, its window work fills that stretch. Each point still
+/// runs exactly its own iterations, so no result changes.
 #[inline(always)]
 fn run_job_body<K: Kernels>(job: &Job, np: &mut [[f32; 2]], st: &mut [bool], er: &mut [f32]) {
     let prep = job.prep;
-    let mut patch = K::new_patch();
+    let mut patches = [K::new_patch(), K::new_patch()];
     for level in (0..=job.max_level).rev() {
-        let (pl, dl, nl) = (&prep.prev[level], &prep.derivs[level], &prep.next[level]);
-        for (k, i) in job.range.clone().enumerate() {
-            track_point::<K>(
-                pl, dl, nl, job.pts[i], &mut np[k], &mut st[k], &mut er[k], level, job.max_level,
-                job.crit, job.min_eig, &mut patch,
-            );
+        let cx = LevelCtx {
+            prev: &prep.prev[level],
+            deriv: &prep.derivs[level],
+            next: &prep.next[level],
+            level,
+            max_level: job.max_level,
+            crit: job.crit,
+            min_eig_threshold: job.min_eig,
+        };
+        let mut lanes: [Option<Track>; 2] = [None, None];
+        let mut todo = 0..job.range.len();
+        loop {
+            let mut busy = false;
+            for (lane, patch) in lanes.iter_mut().zip(patches.iter_mut()) {
+                while lane.is_none() {
+                    let Some(k) = todo.next() else { break };
+                    let i = job.range.start + k;
+                    *lane = Track::start::<K>(&cx, k, job.pts[i], &mut np[k], &mut st[k], &mut er[k], patch);
+                }
+                if let Some(t) = lane {
+                    let k = t.k;
+                    if !t.step::<K>(&cx, &mut np[k], &mut st[k], &mut er[k], patch) {
+                        *lane = None;
+                    }
+                    busy = true;
+                }
+            }
+            if !busy {
+                break;
+            }
         }
     }
 }
