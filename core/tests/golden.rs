@@ -25,7 +25,7 @@ use std::fs;
 use std::sync::{Arc, Mutex, OnceLock};
 
 use siftlab_core::matching::{match_feature, matching_info, Strategy};
-use siftlab_core::sift::{detect_and_compute, Features, KeyPoint};
+use siftlab_core::sift::{detect, detect_and_compute, par, Features, KeyPoint};
 use siftlab_core::GrayImage;
 
 /// Our SIFT of fixture frame `id` at `set`'s SIMD width, computed once per test
@@ -110,6 +110,30 @@ fn noipp_differences(set: &GoldenSet) -> (usize, Vec<String>) {
         }
     }
     (total, report)
+}
+
+/// `detect` (what the odometry calls: keypoints only) gives OpenCV's
+/// keypoints bit for bit both ways it runs: on one thread, where each octave
+/// is scanned as soon as it is blurred and then dropped, and on all threads,
+/// where the whole pyramid is built first.
+#[test]
+fn detect_alone_is_bit_exact_on_one_thread_and_on_all() {
+    let bits = |k: &KeyPoint| (k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits(), k.octave);
+    let mut compared = 0;
+    for set in golden_sets() {
+        for id in set_frames(&set, "noipp") {
+            let golden = set.read("noipp", &id);
+            let fpath = fixtures().join(format!("mykitti/gray/00/image_0/{id}.png"));
+            let img = GrayImage::decode(&fs::read(&fpath).unwrap()).unwrap();
+            let want: Vec<_> = golden.keypoints.iter().map(bits).collect();
+            let serial: Vec<_> = par::serial(|| detect(&img, &set.params())).iter().map(bits).collect();
+            let parallel: Vec<_> = par::with_threads(4, || detect(&img, &set.params())).iter().map(bits).collect();
+            assert_eq!(serial, want, "{} {id}: detect on one thread", set.name);
+            assert_eq!(parallel, want, "{} {id}: detect on several threads", set.name);
+            compared += want.len();
+        }
+    }
+    assert!(compared > 0, "no golden keypoints compared");
 }
 
 /// Angular difference in degrees, across the 0/360 wrap.

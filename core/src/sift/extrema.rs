@@ -46,9 +46,8 @@ fn dog(levels: &[Plane], j: usize) -> Dog<'_> {
 /// a row then read it from cache. That moves each Gaussian level through
 /// memory once, instead of writing five DoG planes per octave and reading
 /// them back nine times (a third of SIFT's memory traffic on a KITTI frame).
-pub fn scan_octave(gauss: &[Plane], o: usize, rows: std::ops::Range<usize>, p: &SiftParams, out: &mut Vec<KeyPoint>) {
+pub fn scan_octave(levels: &[Plane], o: usize, rows: std::ops::Range<usize>, p: &SiftParams, out: &mut Vec<KeyPoint>) {
     let nl = p.n_octave_layers;
-    let levels = &gauss[o * (nl + 3)..(o + 1) * (nl + 3)];
     let (w, h) = (levels[0].width, levels[0].height);
     // floor(0.5 * contrastThreshold / nOctaveLayers * 255 * SIFT_FIXPT_SCALE),
     // an int compared as float: 1 with the defaults.
@@ -83,16 +82,16 @@ pub fn scan_octave(gauss: &[Plane], o: usize, rows: std::ops::Range<usize>, p: &
                     // Each histogram is taken one keypoint late, so its
                     // window's rows (most of them below the scan, not read
                     // yet) arrive while the one before is counted.
-                    prefetch_histogram_window(gauss, &refined, p);
+                    prefetch_histogram_window(levels, &refined);
                     if let Some(before) = pending.replace(refined) {
-                        push_oriented(gauss, before, p, out);
+                        push_oriented(levels, before, p, out);
                     }
                 }
             }
         }
     }
     if let Some(last) = pending {
-        push_oriented(gauss, last, p, out);
+        push_oriented(levels, last, p, out);
     }
 }
 

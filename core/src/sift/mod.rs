@@ -125,23 +125,30 @@ fn scale_space(img: &GrayImage, p: &SiftParams) -> ScaleSpace {
     ScaleSpace { gauss, octaves }
 }
 
+/// Rows per scan job: bands, so the first octave spreads over all threads;
+/// OpenCV splits its scan by rows the same way.
+const BAND: usize = 32;
+
 fn find_keypoints(ss: &ScaleSpace, p: &SiftParams) -> Vec<KeyPoint> {
     let mut kps = Vec::new();
-    let nl = p.n_octave_layers;
-    // Bands of rows, so the first octave spreads over all threads; OpenCV
-    // splits its scan by rows the same way.
-    const BAND: usize = 32;
+    let per = p.n_octave_layers + 3;
     let jobs: Vec<(usize, usize)> = (0..ss.octaves)
         .flat_map(|o| {
-            let h = ss.gauss[o * (nl + 3)].height;
+            let h = ss.gauss[o * per].height;
             (0..h).step_by(BAND).map(move |r0| (o, r0))
         })
         .collect();
     run_parallel(
         &jobs,
-        |&(o, r0), out| extrema::scan_octave(&ss.gauss, o, r0..r0 + BAND, p, out),
+        |&(o, r0), out| extrema::scan_octave(&ss.gauss[o * per..(o + 1) * per], o, r0..r0 + BAND, p, out),
         &mut kps,
     );
+    in_opencv_order(kps, p)
+}
+
+/// §10: duplicates removed from the sorted keypoints, the best `nfeatures`
+/// kept, first-octave coordinates halved.
+fn in_opencv_order(mut kps: Vec<KeyPoint>, p: &SiftParams) -> Vec<KeyPoint> {
     order::remove_duplicated_sorted(&mut kps);
     if p.nfeatures > 0 {
         order::retain_best(&mut kps, p.nfeatures);
@@ -193,8 +200,34 @@ pub fn detect(img: &GrayImage, p: &SiftParams) -> Vec<KeyPoint> {
     if img.width() == 0 || img.height() == 0 {
         return Vec::new();
     }
-    let ss = scale_space(img, p);
-    find_keypoints(&ss, p)
+    if par::threads() > 1 {
+        // All octaves' scans share out over the threads at once.
+        let ss = scale_space(img, p);
+        return find_keypoints(&ss, p);
+    }
+    // On one thread (an odometry detection worker): each octave is scanned
+    // as soon as it is blurred, while its last levels are still in cache,
+    // and its planes go back to the pool before the next octave's are
+    // taken, so a worker holds one octave (45 MB on KITTI's first) instead
+    // of the whole pyramid (60 MB). Without descriptors nothing reads an
+    // octave after its scan. Same keypoints: §10 sorts them all.
+    let base = initial::initial_image(img, p.sigma);
+    let octaves = pyramid::octave_count(base.width, base.height);
+    let sig = pyramid::level_sigmas(p.sigma, p.n_octave_layers);
+    let mut kps = Vec::new();
+    let mut first = Some(base);
+    for o in 0..octaves {
+        let Some(base) = first.take() else { break };
+        let levels = pyramid::octave_levels(base, &sig);
+        let h = levels[0].height;
+        for r0 in (0..h).step_by(BAND) {
+            extrema::scan_octave(&levels, o, r0..r0 + BAND, p, &mut kps);
+        }
+        if o + 1 < octaves {
+            first = Some(pyramid::next_octave_base(&levels, p.n_octave_layers));
+        }
+    }
+    in_opencv_order(kps, p)
 }
 
 /// `detectAndCompute(img, None)`: keypoints in OpenCV's order and one

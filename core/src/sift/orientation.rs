@@ -12,22 +12,23 @@ const ORI_SIG_FCTR: f32 = 1.5;
 const ORI_RADIUS: f32 = 4.5;
 const ORI_PEAK_RATIO: f32 = 0.8;
 
-/// The keypoint's scale in its octave's pixels, and its Gaussian level.
-fn scale_and_level<'g>(gauss: &'g [Plane], refined: &Refined, p: &SiftParams) -> (f32, &'g Plane) {
+/// The keypoint's scale in its octave's pixels, and its Gaussian level
+/// (`levels` are its octave's).
+fn scale_and_level<'g>(levels: &'g [Plane], refined: &Refined) -> (f32, &'g Plane) {
     let scl = refined.kp.size * 0.5 / (1u32 << refined.o) as f32;
-    (scl, &gauss[refined.o * (p.n_octave_layers + 3) + refined.layer])
+    (scl, &levels[refined.layer])
 }
 
 /// Asks for the rows of the window [`push_oriented`] will read for
 /// `refined`, ahead of it.
-pub fn prefetch_histogram_window(gauss: &[Plane], refined: &Refined, p: &SiftParams) {
-    let (scl, img) = scale_and_level(gauss, refined, p);
+pub fn prefetch_histogram_window(levels: &[Plane], refined: &Refined) {
+    let (scl, img) = scale_and_level(levels, refined);
     prefetch_window(img, refined.r, refined.c, rne(ORI_RADIUS * scl).max(0) as usize + 1);
 }
 
 /// Pushes one copy of the refined keypoint per qualifying histogram peak.
-pub fn push_oriented(gauss: &[Plane], refined: Refined, p: &SiftParams, out: &mut Vec<KeyPoint>) {
-    let (scl, img) = scale_and_level(gauss, &refined, p);
+pub fn push_oriented(levels: &[Plane], refined: Refined, p: &SiftParams, out: &mut Vec<KeyPoint>) {
+    let (scl, img) = scale_and_level(levels, &refined);
     let Refined { kp, r, c, .. } = refined;
     let (radius, sigma, lanes) = (rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
     let hist = crate::with_hw_fma!([f32; 36], orientation_hist(img, r, c, radius, sigma, lanes));

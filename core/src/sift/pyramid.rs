@@ -39,20 +39,35 @@ pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) 
     if octaves == 0 {
         return gauss;
     }
-    gauss.push(base);
+    let mut first = base;
     for o in 0..octaves {
-        if o > 0 {
-            // INTER_NEAREST to (w/2, h/2) of the level with twice the base σ;
-            // for these sizes it always samples src[2y][2x].
-            let first = downsample(&gauss[(o - 1) * per + layers]);
-            gauss.push(first);
-        }
-        for i in 1..per {
-            let level = gaussian_blur(&gauss[o * per + i - 1], sig[i]);
-            gauss.push(level);
+        gauss.extend(octave_levels(first, &sig));
+        if o + 1 < octaves {
+            first = next_octave_base(&gauss[o * per..], layers);
+        } else {
+            break;
         }
     }
     gauss
+}
+
+/// The `sig.len()` Gaussian levels of one octave from its first level, each
+/// blurred from the one before by `sig[i]`.
+pub fn octave_levels(first: Plane, sig: &[f64]) -> Vec<Plane> {
+    let mut levels = Vec::with_capacity(sig.len());
+    levels.push(first);
+    for &s in &sig[1..] {
+        let level = gaussian_blur(&levels[levels.len() - 1], s);
+        levels.push(level);
+    }
+    levels
+}
+
+/// The first level of the next octave: INTER_NEAREST to (w/2, h/2) of the
+/// level with twice the octave's base σ (level `layers`); for these sizes it
+/// always samples src[2y][2x].
+pub fn next_octave_base(levels: &[Plane], layers: usize) -> Plane {
+    downsample(&levels[layers])
 }
 
 fn downsample(src: &Plane) -> Plane {
