@@ -48,6 +48,11 @@ impl GrayImage {
     /// does for the lab's frames: 8-bit gray is taken as is, colour goes through
     /// OpenCV's fixed-point BGR2GRAY, 16-bit samples keep their high byte.
     pub fn decode(bytes: &[u8]) -> Result<Self> {
+        // Every KITTI frame: 8-bit gray, decoded without the general path.
+        if let Some(decoded) = crate::gray_png::decode_gray8(bytes, MAX_PIXELS) {
+            let (width, height, data) = decoded?;
+            return Ok(GrayImage { width, height, data });
+        }
         let format = image::guess_format(bytes).map_err(|_| {
             Error::Decode(
                 "not an image: the file is neither PNG nor JPEG (use a PNG or JPEG frame, \

@@ -11,6 +11,7 @@
 pub mod cli;
 pub mod dataset;
 pub mod error;
+mod gray_png;
 pub mod image;
 pub mod matching;
 pub mod pyfmt;
