@@ -215,17 +215,18 @@ pub fn detect(img: &GrayImage, p: &SiftParams) -> Vec<KeyPoint> {
     let octaves = pyramid::octave_count(base.width, base.height);
     let sig = pyramid::level_sigmas(p.sigma, p.n_octave_layers);
     let mut kps = Vec::new();
-    let mut first = Some(base);
+    let mut first = base;
     for o in 0..octaves {
-        let Some(base) = first.take() else { break };
-        let levels = pyramid::octave_levels(base, &sig);
-        let h = levels[0].height;
-        for r0 in (0..h).step_by(BAND) {
+        let levels = pyramid::octave_levels(first, &sig);
+        for r0 in (0..levels[0].height).step_by(BAND) {
             extrema::scan_octave(&levels, o, r0..r0 + BAND, p, &mut kps);
         }
-        if o + 1 < octaves {
-            first = Some(pyramid::next_octave_base(&levels, p.n_octave_layers));
+        if o + 1 == octaves {
+            break;
         }
+        // Taken before `levels` goes back to the pool at the end of the loop
+        // body, so the next octave's planes reuse this one's buffers.
+        first = pyramid::next_octave_base(&levels, p.n_octave_layers);
     }
     in_opencv_order(kps, p)
 }

@@ -42,11 +42,10 @@ pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) 
     let mut first = base;
     for o in 0..octaves {
         gauss.extend(octave_levels(first, &sig));
-        if o + 1 < octaves {
-            first = next_octave_base(&gauss[o * per..], layers);
-        } else {
+        if o + 1 == octaves {
             break;
         }
+        first = next_octave_base(&gauss[o * per..], layers);
     }
     gauss
 }

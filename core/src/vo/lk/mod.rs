@@ -575,7 +575,11 @@ impl Track {
             }
             return None;
         }
-        let track = Track {
+        if cx.crit.0 == 0 {
+            Track::finish::<K>(cx, next, status, err, patch);
+            return None;
+        }
+        Some(Track {
             k,
             a11,
             a12,
@@ -584,12 +588,7 @@ impl Track {
             n: [guess[0] - HALF_WIN, guess[1] - HALF_WIN],
             prev_delta: [0.0; 2],
             j: 0,
-        };
-        if cx.crit.0 == 0 {
-            track.finish::<K>(cx, next, status, err, patch);
-            return None;
-        }
-        Some(track)
+        })
     }
 
     /// One iteration; false when the point is done at this level (then
@@ -634,14 +633,14 @@ impl Track {
             }
         };
         if !go_on {
-            self.finish::<K>(cx, next, status, err, patch);
+            Track::finish::<K>(cx, next, status, err, patch);
         }
         go_on
     }
 
     /// The error of a point still tracked after level 0.
     #[inline(always)]
-    fn finish<K: Kernels>(&self, cx: &LevelCtx, next: &[f32; 2], status: &mut bool, err: &mut f32, patch: &mut K::Patch) {
+    fn finish<K: Kernels>(cx: &LevelCtx, next: &[f32; 2], status: &mut bool, err: &mut f32, patch: &mut K::Patch) {
         if *status && cx.level == 0 {
             let m = [next[0] - HALF_WIN, next[1] - HALF_WIN];
             let (jx, jy) = (m[0].floor() as i32, m[1].floor() as i32);
