@@ -206,11 +206,11 @@ pub fn detect(img: &GrayImage, p: &SiftParams) -> Vec<KeyPoint> {
         return find_keypoints(&ss, p);
     }
     // On one thread (an odometry detection worker): each octave is scanned
-    // as soon as it is blurred, while its last levels are still in cache,
-    // and its planes go back to the pool before the next octave's are
-    // taken, so a worker holds one octave (45 MB on KITTI's first) instead
-    // of the whole pyramid (60 MB). Without descriptors nothing reads an
-    // octave after its scan. Same keypoints: §10 sorts them all.
+    // as soon as it is blurred, and its planes go back to the pool before
+    // the next octave's are taken, so a worker holds one octave (45 MB on
+    // KITTI's first) instead of the whole pyramid (60 MB): peak RSS of a
+    // 99-frame `view_trajectory` 140 → 114 MB. Without descriptors nothing
+    // reads an octave after its scan. Same keypoints: §10 sorts them all.
     let base = initial::initial_image(img, p.sigma);
     let octaves = pyramid::octave_count(base.width, base.height);
     let sig = pyramid::level_sigmas(p.sigma, p.n_octave_layers);
