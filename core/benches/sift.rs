@@ -12,12 +12,12 @@ use siftlab_core::sift::pyramid::level_sigmas;
 use siftlab_core::sift::{detect_and_compute, SiftParams};
 use siftlab_core::GrayImage;
 
-/// Frame 0 of `$SIFTLAB_BENCH_DATASET` (default: the committed fixtures); bench_compare.sh
+/// Frame 0 of `$SIFTLAB_BENCH_DATASET` (default: the bundled KITTI frames); bench_compare.sh
 /// points OpenCV at the same dataset.
 fn load() -> GrayImage {
     let ds = std::env::var_os("SIFTLAB_BENCH_DATASET")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/mykitti"));
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI"));
     let p = ds.join("gray/00/image_0/000000.png");
     let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
     GrayImage::decode(&bytes).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
@@ -38,7 +38,7 @@ fn bench_sift(c: &mut Criterion) {
 }
 
 /// Gaussian levels 1..=5 of octave 0 from the frame's doubled base, each blurred
-/// from the one before (spec §4): about two fifths of a VO frame's CPU time.
+/// from the one before (docs/fidelity.md §SIFT-4): about two fifths of a VO frame's CPU time.
 fn bench_octave0_blurs(c: &mut Criterion) {
     let img = load();
     let params = SiftParams::for_host();

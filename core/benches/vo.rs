@@ -19,7 +19,7 @@ use siftlab_core::GrayImage;
 fn load(id: usize) -> GrayImage {
     let ds = std::env::var_os("SIFTLAB_BENCH_DATASET")
         .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/mykitti"));
+        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI"));
     let p = ds.join(format!("gray/00/image_0/{id:06}.png"));
     let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
     GrayImage::decode(&bytes).unwrap_or_else(|e| panic!("{}: {e}", p.display()))

@@ -170,15 +170,18 @@ impl Dataset {
     pub fn check_frames(&self, n: usize) -> Result<()> {
         if n > self.frame_count {
             return Err(Error::Dataset(format!(
-                "asked for {n} frames but {} has only {} ({} is missing)",
+                "frames 0 to {} are needed but {} has frames 0 to {} only ({} is missing); ask for FRAME_ID {} or less",
+                n - 1,
                 self.root.display(),
-                self.frame_count,
-                frame_relative_path(self.frame_count)
+                self.frame_count - 1,
+                frame_relative_path(self.frame_count),
+                self.frame_count - 1
             )));
         }
         if n > self.poses.len() {
             return Err(Error::Dataset(format!(
-                "asked for {n} frames but {POSES_FILE} has only {} pose lines",
+                "frames 0 to {} are needed but {POSES_FILE} has only {} pose lines",
+                n - 1,
                 self.poses.len()
             )));
         }
@@ -258,7 +261,7 @@ mod tests {
         let e = ds.load_frame(1).unwrap_err().to_string();
         assert!(e.starts_with("frame 1 ("), "{e}");
         let e = ds.check_frames(3).unwrap_err().to_string();
-        assert!(e.contains("has only 2 (gray/00/image_0/000002.png is missing)"), "{e}");
+        assert!(e.contains("has frames 0 to 1 only (gray/00/image_0/000002.png is missing)"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -284,7 +284,7 @@ mod tests {
 
     #[test]
     fn the_fixture_frames_match_the_image_crate() {
-        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/mykitti/gray/00/image_0");
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI/gray/00/image_0");
         let mut n = 0;
         for entry in std::fs::read_dir(&dir).unwrap() {
             let bytes = std::fs::read(entry.unwrap().path()).unwrap();

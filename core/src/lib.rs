@@ -1,6 +1,6 @@
 //! siftlab-core: the COMP24011 feature-matching lab, reproduced in pure Rust.
 //!
-//! Every lab rule lives here once (see `../shared/docs/architecture.md`):
+//! Every lab rule lives here once (see `docs/architecture.md`):
 //! SIFT exactly as OpenCV 4.8.0 computes it ([`sift`]), the brute-force
 //! matcher and the dt / nn / nndr strategies with `matching_info`
 //! ([`matching`]), the lab's monocular visual odometry ([`vo`]) and the images
@@ -13,6 +13,7 @@ pub mod dataset;
 pub mod error;
 mod gray_png;
 pub mod image;
+pub mod manual;
 pub mod matching;
 pub mod pyfmt;
 pub mod render;

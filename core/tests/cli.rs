@@ -6,8 +6,9 @@
 mod golden_data;
 mod json_mini;
 
-use golden_data::{fixtures, golden_frames, golden_lanes, golden_params, golden_sets};
+use golden_data::{golden_frames, golden_lanes, golden_params, golden_sets, kitti, primary_set};
 
+use siftlab_core::manual::EXAMPLES;
 use siftlab_core::matching::{match_feature, matching_info, Strategy};
 use siftlab_core::sift::{detect_and_compute, Features};
 use siftlab_core::GrayImage;
@@ -16,8 +17,9 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+/// The bundled real KITTI frames the primary goldens were computed on.
 fn dataset() -> PathBuf {
-    fixtures().join("mykitti")
+    kitti()
 }
 
 fn repo_root() -> PathBuf {
@@ -75,7 +77,7 @@ fn assert_fails(o: &Output, words: &[&str], what: &str) {
 // ---------------------------------------------------------------------------
 // get_info against OpenCV
 
-/// Our features of fixture frame `frame` (golden SIFT parameters), once per test binary.
+/// Our features of bundled frame `frame` (golden SIFT parameters), once per test binary.
 fn library_features(frame: usize) -> std::sync::Arc<Features> {
     use std::sync::{Arc, Mutex, OnceLock};
     static CACHE: OnceLock<Mutex<Vec<Option<Arc<Features>>>>> = OnceLock::new();
@@ -92,19 +94,20 @@ fn library_features(frame: usize) -> std::sync::Arc<Features> {
         .clone()
 }
 
-/// Each line of `tests/fixtures/golden/get_info.jsonl` (tests/scripts/gen_goldens.py)
-/// holds one `get_info` call on the committed frames, `{"dataset_frame", "feature",
+/// Each line of the primary set's `get_info.jsonl` (tests/scripts/gen_goldens.py)
+/// holds one `get_info` call on the bundled frames, `{"dataset_frame", "feature",
 /// "algo", "threshold"}`, and the exact stdout the lab's Python + OpenCV printed for
-/// `-d tests/fixtures/mykitti`, so the CLI runs from the repository root with that path.
+/// `-d www/demo/MyKITTI`, so the CLI runs from the repository root with that path.
 ///
 /// The binary must print the lab's `vo params`, `debug run` and `ret count` lines
 /// exactly, and as `ret value` exactly what the library gives (golden.rs compares the
 /// library with OpenCV on every draw; the default wheel's IPP can move a distance in
-/// rare draws, spec §14). Every process runs SIFT twice, so this runs the binary on
+/// rare draws, docs/fidelity.md §SIFT-14). Every process runs SIFT twice, so this runs the binary on
 /// every 12th draw plus every `nn` draw without a threshold.
 #[test]
 fn get_info_prints_exactly_what_the_lab_prints() {
-    let path = fixtures().join("golden/get_info.jsonl");
+    let set = primary_set();
+    let path = set.dir().join("get_info.jsonl");
     let text = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     let (mut n, mut identical) = (0, 0);
     let mut failures = Vec::new();
@@ -116,7 +119,7 @@ fn get_info_prints_exactly_what_the_lab_prints() {
         }
         let field = |k: &str| rec.get(k).unwrap_or_else(|| panic!("line {}: no {k:?}", lineno + 1));
         let algo = field("algo").str().expect("algo is a string").to_owned();
-        let mut argv: Vec<String> = vec!["-d".into(), "tests/fixtures/mykitti".into(), "get_info".into()];
+        let mut argv: Vec<String> = vec!["-d".into(), set.dataset.clone(), "get_info".into()];
         argv.extend(golden_lanes_args());
         argv.extend(["-a".into(), algo.clone()]);
         let threshold = match field("threshold") {
@@ -165,14 +168,14 @@ fn first_golden_frame() -> String {
     golden_frames("noipp").remove(0)
 }
 
-/// The fixture frame where OpenCV's two SIMD widths disagree (one descriptor
-/// row of `golden` and `golden-avx2` differs by 1), so `--opencv-lanes` is seen.
+/// A frame every golden set has; each set is checked on its own dataset at
+/// its own width (golden.rs shows that the other width misses each set).
 const WIDTH_FRAME: &str = "000002";
 
 #[test]
 fn sift_json_round_trips_opencv_values_bit_exactly() {
-    let frame = dataset().join(format!("gray/00/image_0/{WIDTH_FRAME}.png"));
     for set in golden_sets() {
+        let frame = set.frame_path(WIDTH_FRAME);
         let lanes = set.lanes.to_string();
         let o = siftlab(&["--opencv-lanes", &lanes, "sift", frame.to_str().unwrap(), "--json"]);
         assert!(o.status.success(), "sift --json failed: {}", stderr(&o));
@@ -208,7 +211,7 @@ fn sift_plain_prints_count_and_time() {
     let o = siftlab(&["sift", frame.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let out = stdout(&o);
-    let golden = fs::read(fixtures().join(format!("golden/noipp/{id}.sift"))).unwrap();
+    let golden = fs::read(primary_set().dir().join(format!("noipp/{id}.sift"))).unwrap();
     let n = u32::from_le_bytes(golden[16..20].try_into().unwrap());
     let line = out.trim_end();
     let rest = line
@@ -224,7 +227,7 @@ fn sift_repeat_reports_best_and_mean() {
     let frame = dataset().join(format!("gray/00/image_0/{id}.png"));
     let o = siftlab(&["sift", frame.to_str().unwrap(), "--repeat", "3"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let golden = fs::read(fixtures().join(format!("golden/noipp/{id}.sift"))).unwrap();
+    let golden = fs::read(primary_set().dir().join(format!("noipp/{id}.sift"))).unwrap();
     let n = u32::from_le_bytes(golden[16..20].try_into().unwrap());
     let line = stdout(&o).trim_end().to_owned();
     let rest = line.strip_prefix(&format!("{n} keypoints in ")).unwrap_or_else(|| panic!("unexpected {line:?}"));
@@ -395,7 +398,8 @@ fn a_broken_frame_stops_view_trajectory_with_the_error_on_its_own_line() {
         fs::copy(dataset().join("gray/00/image_0").join(&name), frames.join(&name)).unwrap();
     }
     fs::write(frames.join("000005.png"), b"not a png").unwrap();
-    let o = siftlab_in(&ds, &["-d", ds.to_str().unwrap(), "view_trajectory", "6"]);
+    // FRAME_ID 5: frames 0 to 5, as the lab counts.
+    let o = siftlab_in(&ds, &["-d", ds.to_str().unwrap(), "view_trajectory", "5"]);
     assert_fails(&o, &["frame 5", "000005.png", "not an image"], "broken frame 5");
     let err = stderr(&o);
     // Five frames of SIFT take well over the bar's 100 ms refresh: it was drawn.
@@ -433,4 +437,49 @@ fn siftlab_simd_caps_the_kernels_without_changing_the_result() {
     assert_eq!(o.status.code(), Some(2), "an unknown level is a usage error");
     assert!(stderr(&o).contains("SIFTLAB_SIMD=sse4 is not a SIMD level: use scalar, avx2 or avx512"), "{}", stderr(&o));
     assert!(stdout(&o).is_empty());
+}
+
+/// The lab manual's seven examples, through the binary on the bundled frames:
+/// stdout is the lab's four lines with the manual's printed value.
+#[test]
+fn the_manuals_seven_examples_print_the_manuals_values() {
+    for e in &EXAMPLES {
+        let mut argv = vec!["-d".to_string(), "www/demo/MyKITTI".into(), "get_info".into(), "-a".into(), e.algo.into()];
+        if let Some(t) = e.threshold {
+            argv.extend(["-t".into(), t.to_string()]);
+        }
+        argv.extend([e.frame.to_string(), e.feature.to_string()]);
+        let argv_ref: Vec<&str> = argv.iter().map(String::as_str).collect();
+        let o = siftlab(&argv_ref);
+        assert!(o.status.success(), "siftlab {argv:?}: {}", stderr(&o));
+        let t = e.threshold.map_or("None".to_string(), siftlab_core::pyfmt::py_float);
+        let want = format!(
+            "vo params: ('{}', {t}, 'www/demo/MyKITTI')\ndebug run: get_info({}, {})\nret value: {}\nret count: 3\n",
+            e.algo, e.frame, e.feature, e.expected
+        );
+        assert_eq!(stdout(&o), want, "{}: {}", e.task, e.command());
+    }
+}
+
+/// `view_trajectory FRAME_ID` runs frames 0..=FRAME_ID as the lab counts:
+/// `--save-poses` writes FRAME_ID+1 lines, stdout is the lab's three lines and
+/// the summary goes to stderr.
+#[test]
+fn view_trajectory_counts_frames_as_the_lab_does() {
+    let dir = scratch("vo-count");
+    let poses = dir.join("p.txt");
+    let png = dir.join("t.png");
+    let ds = dataset();
+    let o = siftlab(&["-d", ds.to_str().unwrap(), "view_trajectory", "4", "--save-poses", poses.to_str().unwrap(), "--output", png.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let want = format!("vo params: (None, None, '{}')\ndebug run: view_trajectory(4,)\nret value: None\n", ds.to_str().unwrap());
+    assert_eq!(stdout(&o), want);
+    assert_eq!(fs::read_to_string(&poses).unwrap().lines().count(), 5, "frames 0..=4");
+    assert!(stderr(&o).contains("trajectory error (ATE RMSE, 5 frames)"), "{}", stderr(&o));
+    assert!(png.exists());
+
+    // Beyond the bundled run of frames: which frames exist, and what to ask for.
+    let o = siftlab(&["-d", ds.to_str().unwrap(), "view_trajectory", "150", "--output", png.to_str().unwrap()]);
+    assert_fails(&o, &["frames 0 to 150", "frames 0 to 99 only", "000100.png", "FRAME_ID 99 or less"], "view_trajectory 150");
+    let _ = fs::remove_dir_all(&dir);
 }

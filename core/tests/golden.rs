@@ -1,13 +1,14 @@
 //! Golden tests: our SIFT against OpenCV 4.8.0.76 on the committed fixture frames.
 //!
-//! The goldens in `tests/fixtures/{golden,golden-avx2}/{noipp,ipp}/NNNNNN.sift` were
-//! written by the fixture generator (tests/scripts) from `cv2.SIFT_create(nfeatures=1500)`
-//! run on `tests/fixtures/mykitti/gray/00/image_0/NNNNNN.png`, on an AVX-512 CPU
-//! (`golden`, OpenCV's SIFT kernels 16 lanes wide) and on an AVX2 CPU (`golden-avx2`, 8
-//! lanes; spec §13); every test below runs on both sets, at each set's width:
-//! - `noipp`: `OPENCV_IPP=disabled`; spec §14 says every field, descriptors included,
+//! The goldens in `tests/fixtures/{golden-avx2,golden}/{noipp,ipp}/NNNNNN.sift` were
+//! written by `tests/scripts/gen_goldens.py` from `cv2.SIFT_create(nfeatures=1500)`:
+//! `golden-avx2` on an AVX2 CPU (OpenCV's SIFT kernels 8 lanes wide) on the bundled
+//! KITTI frames `www/demo/MyKITTI` (0–5 and the manual's 119, 120, 149, 150), and
+//! `golden` on an AVX-512 CPU (16 lanes; docs/fidelity.md §SIFT-13) on the synthetic frames of
+//! `tests/fixtures/synthetic`. Every test below runs on both sets, at each set's width:
+//! - `noipp`: `OPENCV_IPP=disabled`; docs/fidelity.md §SIFT-14 says every field, descriptors included,
 //!   is then reproducible bit for bit, so we demand exactly that;
-//! - `ipp`: the default wheel, whose IPP exp/magnitude differ at ulp level; spec §14
+//! - `ipp`: the default wheel, whose IPP exp/magnitude differ at ulp level; §SIFT-14
 //!   allows angles off by < 1e-4° and descriptor elements off by 1.
 //!
 //! File format (little endian): b"SIFTGLD1", u32 width, u32 height, u32 N,
@@ -18,12 +19,13 @@
 mod golden_data;
 mod json_mini;
 
-use golden_data::{fixtures, golden_sets, set_frames, Golden, GoldenSet};
+use golden_data::{golden_sets, kitti, primary_set, set_frames, Golden, GoldenSet};
 
 use std::collections::HashMap;
 use std::fs;
 use std::sync::{Arc, Mutex, OnceLock};
 
+use siftlab_core::manual::EXAMPLES;
 use siftlab_core::matching::{match_feature, matching_info, Strategy};
 use siftlab_core::sift::{detect, detect_and_compute, par, Features, KeyPoint};
 use siftlab_core::GrayImage;
@@ -31,12 +33,13 @@ use siftlab_core::GrayImage;
 /// Our SIFT of fixture frame `id` at `set`'s SIMD width, computed once per test
 /// binary (tests share it).
 fn ours(set: &GoldenSet, id: &str) -> Arc<Features> {
-    type Cache = Mutex<HashMap<(usize, String), Arc<OnceLock<Arc<Features>>>>>;
+    // Keyed by width and frame file: the sets' frames share ids but not data.
+    type Cache = Mutex<HashMap<(usize, std::path::PathBuf), Arc<OnceLock<Arc<Features>>>>>;
     static CACHE: OnceLock<Cache> = OnceLock::new();
-    let key = (set.lanes, id.to_owned());
+    let key = (set.lanes, set.frame_path(id));
     let slot = CACHE.get_or_init(Default::default).lock().unwrap().entry(key).or_default().clone();
     slot.get_or_init(|| {
-        let fpath = fixtures().join(format!("mykitti/gray/00/image_0/{id}.png"));
+        let fpath = set.frame_path(id);
         let img = GrayImage::decode(&fs::read(&fpath).unwrap())
             .unwrap_or_else(|e| panic!("{}: {e}", fpath.display()));
         Arc::new(detect_and_compute(&img, &set.params()))
@@ -46,7 +49,7 @@ fn ours(set: &GoldenSet, id: &str) -> Arc<Features> {
 
 fn load(set: &GoldenSet, kind: &str, id: &str) -> (Golden, Arc<Features>) {
     let golden = set.read(kind, id);
-    let fpath = fixtures().join(format!("mykitti/gray/00/image_0/{id}.png"));
+    let fpath = set.frame_path(id);
     let (w, h) = image::image_dimensions(&fpath).unwrap();
     assert_eq!((w, h), (golden.width, golden.height), "{id}: frame size differs from the golden's");
     (golden, ours(set, id))
@@ -123,8 +126,7 @@ fn detect_alone_is_bit_exact_on_one_thread_and_on_all() {
     for set in golden_sets() {
         for id in set_frames(&set, "noipp") {
             let golden = set.read("noipp", &id);
-            let fpath = fixtures().join(format!("mykitti/gray/00/image_0/{id}.png"));
-            let img = GrayImage::decode(&fs::read(&fpath).unwrap()).unwrap();
+            let img = GrayImage::decode(&fs::read(set.frame_path(&id)).unwrap()).unwrap();
             let want: Vec<_> = golden.keypoints.iter().map(bits).collect();
             let serial: Vec<_> = par::serial(|| detect(&img, &set.params())).iter().map(bits).collect();
             let parallel: Vec<_> = par::with_threads(4, || detect(&img, &set.params())).iter().map(bits).collect();
@@ -156,7 +158,7 @@ fn within_ipp_tolerances(set: &GoldenSet) {
     let mut max_desc = 0i32;
     for id in set_frames(set, "ipp") {
         let (golden, ours) = load(set, "ipp", &id);
-        // Spec §14: IPP never changed the count or order; a peak crossing the 0.8
+        // docs/fidelity.md §SIFT-14: IPP never changed the count or order; a peak crossing the 0.8
         // orientation threshold could, so a count change is a failure worth seeing.
         assert_eq!(ours.keypoints.len(), golden.keypoints.len(), "{id}: keypoint count");
         for (i, (a, b)) in ours.keypoints.iter().zip(&golden.keypoints).enumerate() {
@@ -291,7 +293,7 @@ fn matching_on_opencvs_features_equals_the_labs_python() {
 
 /// End to end on our SIFT: the acceptance (get_info identical to OpenCV's on
 /// random draws). The goldens come from the default (IPP) wheel, whose descriptors may
-/// differ from any open implementation by 1 in rare rows (spec §14), which can move one
+/// differ from any open implementation by 1 in rare rows (§SIFT-14), which can move one
 /// distance; so at most 1% of draws may differ, and each difference is printed.
 #[test]
 fn get_info_end_to_end_equals_the_labs_python() {
@@ -311,7 +313,7 @@ fn get_info_end_to_end_equals_the_labs_python() {
     }
 }
 
-/// The SIMD width matters (spec §13) and the tests above see it: OpenCV's two
+/// The SIMD width matters (docs/fidelity.md §SIFT-13) and the tests above see it: OpenCV's two
 /// widths disagree somewhere on the fixture frames, and each set is missed
 /// when our SIFT runs at the other set's width.
 #[test]
@@ -321,5 +323,21 @@ fn each_golden_set_needs_its_own_simd_width() {
         let (total, report) = noipp_differences(&GoldenSet { lanes: other, ..set });
         eprintln!("{} noipp at the other width ({other} lanes): {} of {total} keypoints or descriptors differ", set.name, report.len());
         assert!(!report.is_empty(), "{}: {other} lanes gave the {}-lane goldens too", set.name, set.lanes);
+    }
+}
+
+/// The lab manual's seven worked examples (Tasks 1–3, frames 119/120 and
+/// 149/150 of the bundled KITTI data) print exactly the manual's values, on
+/// our SIFT at the bundled goldens' width.
+#[test]
+fn the_manuals_seven_examples_reproduce_exactly() {
+    let set = primary_set();
+    assert_eq!(set.dataset_dir().canonicalize().unwrap(), kitti().canonicalize().unwrap());
+    let features = |frame: usize| ours(&set, &format!("{frame:06}"));
+    for e in &EXAMPLES {
+        let (prev, cur) = (features(e.frame - 1), features(e.frame));
+        let m = match_feature(&e.strategy(), &prev, &cur, e.feature).unwrap();
+        let got = matching_info(&prev.keypoints, &cur.keypoints, &m).to_string();
+        assert_eq!(got, e.expected, "{}: {}", e.task, e.command());
     }
 }

@@ -17,7 +17,7 @@ mod json_mini;
 
 use std::fs;
 
-use golden_data::{fixtures, golden_sets, primary_set, set_frames, GoldenSet};
+use golden_data::{golden_sets, primary_set, set_frames, GoldenSet};
 use siftlab_core::sift::detect_and_compute;
 use siftlab_core::simd::{set_cap, SimdLevel};
 use siftlab_core::GrayImage;
@@ -26,7 +26,7 @@ use siftlab_core::GrayImage;
 /// returns how many keypoints were compared.
 fn check_frame(level: SimdLevel, set: &GoldenSet, id: &str) -> usize {
     let golden = set.read("noipp", id);
-    let frame = fixtures().join(format!("mykitti/gray/00/image_0/{id}.png"));
+    let frame = set.frame_path(id);
     let img = GrayImage::decode(&fs::read(&frame).unwrap()).unwrap();
     let ours = detect_and_compute(&img, &set.params());
     let name = set.name;

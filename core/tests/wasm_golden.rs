@@ -27,23 +27,30 @@ extern "C" {
     fn performance_now() -> f64;
 }
 
-const FRAME0: &[u8] = include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000000.png");
-const FRAME1: &[u8] = include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000001.png");
-const GOLDEN0: &[u8] = include_bytes!("../../tests/fixtures/golden/noipp/000000.sift");
-const GOLDEN1: &[u8] = include_bytes!("../../tests/fixtures/golden/noipp/000001.sift");
-const IPP0: &[u8] = include_bytes!("../../tests/fixtures/golden/ipp/000000.sift");
-const IPP1: &[u8] = include_bytes!("../../tests/fixtures/golden/ipp/000001.sift");
-const GET_INFO: &str = include_str!("../../tests/fixtures/golden/get_info.jsonl");
-const META: &str = include_str!("../../tests/fixtures/golden/meta.json");
-/// Frame 2 is where OpenCV's two SIMD widths disagree on the fixtures (one
-/// descriptor row): the primary goldens ran 16 lanes wide, `golden-avx2` 8,
-/// the app's default width.
-const FRAME2: &[u8] = include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000002.png");
-const GOLDEN2: &[u8] = include_bytes!("../../tests/fixtures/golden/noipp/000002.sift");
-const GOLDEN2_AVX2: &[u8] = include_bytes!("../../tests/fixtures/golden-avx2/noipp/000002.sift");
-const META_AVX2: &str = include_str!("../../tests/fixtures/golden-avx2/meta.json");
+/// The bundled KITTI frames and their 8-lane goldens (`golden-avx2`, the app's
+/// default width).
+const FRAME0: &[u8] = include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000000.png");
+const FRAME1: &[u8] = include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000001.png");
+const GOLDEN0: &[u8] = include_bytes!("../../tests/fixtures/golden-avx2/noipp/000000.sift");
+const GOLDEN1: &[u8] = include_bytes!("../../tests/fixtures/golden-avx2/noipp/000001.sift");
+const IPP0: &[u8] = include_bytes!("../../tests/fixtures/golden-avx2/ipp/000000.sift");
+const IPP1: &[u8] = include_bytes!("../../tests/fixtures/golden-avx2/ipp/000001.sift");
+const GET_INFO: &str = include_str!("../../tests/fixtures/golden-avx2/get_info.jsonl");
+const META: &str = include_str!("../../tests/fixtures/golden-avx2/meta.json");
+/// The 16-lane set (`golden`, an AVX-512 CPU) on its synthetic frame 2, so
+/// both of OpenCV's widths are checked in the browser.
+const FRAME2_16: &[u8] = include_bytes!("../../tests/fixtures/synthetic/gray/00/image_0/000002.png");
+const GOLDEN2_16: &[u8] = include_bytes!("../../tests/fixtures/golden/noipp/000002.sift");
+const META_16: &str = include_str!("../../tests/fixtures/golden/meta.json");
+/// The lab manual's example pairs (frames 119/120 and 149/150).
+const MANUAL_FRAMES: [(usize, &[u8]); 4] = [
+    (119, include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000119.png")),
+    (120, include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000120.png")),
+    (149, include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000149.png")),
+    (150, include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000150.png")),
+];
 
-/// The SIMD width OpenCV's SIFT kernels ran with where the goldens were written (spec §13).
+/// The SIMD width OpenCV's SIFT kernels ran with where the goldens were written (docs/fidelity.md §SIFT-13).
 fn golden_lanes() -> usize {
     lanes_of(META)
 }
@@ -118,18 +125,36 @@ fn sift_in_the_browser_is_bit_exact_against_opencv() {
     assert_eq!((kp_ok, desc_ok), (n, n), "wasm SIFT differs from OpenCV (IPP off)");
 }
 
-/// Both SIMD widths in the browser, on the frame where OpenCV's differ: each
-/// width gives its own goldens bit for bit (8 lanes is the app's default).
+/// Both SIMD widths in the browser: the 16-lane goldens bit for bit at 16
+/// lanes (the 8-lane ones are checked above), and missed at 8, so the width
+/// is seen.
 #[wasm_bindgen_test]
 fn sift_in_the_browser_follows_opencvs_simd_width() {
-    let lanes_avx2 = lanes_of(META_AVX2);
-    assert_ne!(lanes_avx2, golden_lanes(), "the two golden sets should have different widths");
-    for (lanes, golden) in [(golden_lanes(), GOLDEN2), (lanes_avx2, GOLDEN2_AVX2)] {
-        let (f, ms) = sift_at(FRAME2, lanes);
-        let (n, kp_ok, desc_ok) = compare(&format!("000002 at {lanes} lanes"), &f, golden);
-        console_log!("wasm SIFT frame 2 at {lanes} lanes vs OpenCV (IPP off): keypoints {kp_ok}/{n}, descriptors {desc_ok}/{n} bit-exact; {ms:.1} ms");
-        assert_eq!((kp_ok, desc_ok), (n, n), "wasm SIFT at {lanes} lanes differs from OpenCV's");
+    let lanes_16 = lanes_of(META_16);
+    assert_ne!(lanes_16, golden_lanes(), "the two golden sets should have different widths");
+    let (f, ms) = sift_at(FRAME2_16, lanes_16);
+    let (n, kp_ok, desc_ok) = compare(&format!("synthetic 000002 at {lanes_16} lanes"), &f, GOLDEN2_16);
+    console_log!("wasm SIFT synthetic frame 2 at {lanes_16} lanes vs OpenCV (IPP off): keypoints {kp_ok}/{n}, descriptors {desc_ok}/{n} bit-exact; {ms:.1} ms");
+    assert_eq!((kp_ok, desc_ok), (n, n), "wasm SIFT at {lanes_16} lanes differs from OpenCV's");
+    let (f, _) = sift_at(FRAME2_16, golden_lanes());
+    let (n, kp_ok, desc_ok) = compare("synthetic 000002 at the other width", &f, GOLDEN2_16);
+    assert!((kp_ok, desc_ok) != (n, n), "{} lanes gave the {lanes_16}-lane goldens too", golden_lanes());
+}
+
+/// The lab manual's seven `get_info` examples on our SIFT in the browser:
+/// exactly the manual's printed values.
+#[wasm_bindgen_test]
+fn the_manuals_seven_examples_reproduce_in_the_browser() {
+    use siftlab_core::manual::EXAMPLES;
+    let features: Vec<(usize, Features)> = MANUAL_FRAMES.iter().map(|&(id, bytes)| (id, sift(bytes).0)).collect();
+    let get = |id: usize| &features.iter().find(|(i, _)| *i == id).expect("a manual frame").1;
+    for e in &EXAMPLES {
+        let (prev, cur) = (get(e.frame - 1), get(e.frame));
+        let m = match_feature(&e.strategy(), prev, cur, e.feature).expect("the manual's feature exists");
+        let got = matching_info(&prev.keypoints, &cur.keypoints, &m).to_string();
+        assert_eq!(got, e.expected, "{}: {}", e.task, e.command());
     }
+    console_log!("wasm: the manual's {} get_info examples reproduce exactly", EXAMPLES.len());
 }
 
 /// OpenCV's own features (default-wheel golden) as `Features`.
@@ -155,7 +180,7 @@ fn matching_in_the_browser_equals_the_lab() {
     // wheel, which the get_info goldens used); our SIFT is checked above.
     let (prev, cur) = (golden_features(IPP0), golden_features(IPP1));
 
-    // knn k=2 against the brute-force definition (spec §16): exact integer sums,
+    // knn k=2 against the brute-force definition (docs/fidelity.md §SIFT-16): exact integer sums,
     // ascending, ties to the lower train index.
     let t0 = performance_now();
     let knn = knn_match(&prev.descriptors, &cur.descriptors, 2);
@@ -407,7 +432,7 @@ fn lk_in_the_browser_is_bit_exact() {
     );
 }
 
-/// A plain separable Gaussian filter on the exact scalar FMA, as spec §3 states it: row
+/// A plain separable Gaussian filter on the exact scalar FMA, as docs/fidelity.md §SIFT-3 states it: row
 /// pass (first tap a product, then one FMA per tap, BORDER_REFLECT_101), then the
 /// symmetric column pass (centre product, then one FMA per pair of rows).
 fn reference_blur(src: &siftlab_core::sift::image::Plane, sigma: f64) -> Vec<f32> {

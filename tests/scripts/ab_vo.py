@@ -29,8 +29,7 @@ def main() -> None:
     ap.add_argument("new")
     ap.add_argument("--rounds", type=int, default=8)
     here = Path(__file__).resolve().parents[2]
-    shared = here.parent / "shared" / "data" / "MyKITTI"
-    ap.add_argument("--dataset", default=str(shared if shared.exists() else here / "target" / "synthkitti"))
+    ap.add_argument("--dataset", default=str(here / "www" / "demo" / "MyKITTI"))
     ap.add_argument("--frames", type=int, default=99, help="view_trajectory's FRAME_ID")
     a = ap.parse_args()
     bins = [a.old, a.new]

@@ -9,7 +9,7 @@
 #
 # Usage: tests/scripts/bench_compare.sh [--dataset DIR] [--no-wasm] [--quick] [--report-only]
 # (--report-only prints the table again from the last run's results.)
-# Dataset default: ../shared/data/MyKITTI if it exists, else tests/fixtures/mykitti.
+# Dataset default: www/demo/MyKITTI (the bundled real KITTI 00 frames).
 # Needs python3 with opencv-contrib-python-headless==4.8.0.76 and numpy<2.
 set -euo pipefail
 
@@ -32,11 +32,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 if [ -z "$DATASET" ]; then
-    if [ -d "$ROOT/../shared/data/MyKITTI" ]; then
-        DATASET="$(cd "$ROOT/../shared/data/MyKITTI" && pwd)"
-    else
-        DATASET="$ROOT/tests/fixtures/mykitti"
-    fi
+    DATASET="$ROOT/www/demo/MyKITTI"
 fi
 # Absolute: cargo runs the benches from core/.
 DATASET="$(cd "$DATASET" && pwd)"

@@ -11,7 +11,7 @@
 A Rust-side bench runner calls this in the same run and divides its own times by these.
 
 Usage: python3 tests/scripts/bench_opencv.py [--dataset DIR] [--repeat 5] [--frames 3] [--knn-all]
-Dataset default: ../shared/data/MyKITTI if it exists, else tests/fixtures/mykitti.
+Dataset default: www/demo/MyKITTI (the bundled real KITTI 00 frames).
 """
 from __future__ import annotations
 
@@ -28,10 +28,7 @@ ROOT = os.path.dirname(os.path.dirname(HERE))
 
 
 def default_dataset():
-    real = os.path.join(ROOT, "..", "shared", "data", "MyKITTI")
-    if os.path.isdir(real):
-        return os.path.normpath(real)
-    return os.path.join(ROOT, "tests", "fixtures", "mykitti")
+    return os.path.join(ROOT, "www", "demo", "MyKITTI")
 
 
 def timed(fn, repeat):

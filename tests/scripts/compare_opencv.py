@@ -20,7 +20,7 @@ the IPP-disabled build's stdout; both are computed, in separate processes).
 
 Usage: python3 tests/scripts/compare_opencv.py [--dataset DIR] [--siftlab target/release/siftlab]
                                                 [--draws 250] [--seed 1] [--frames N] [--json FILE]
-Dataset default: ../shared/data/MyKITTI if it exists, else target/synthkitti (generated if missing).
+Dataset default: www/demo/MyKITTI (the bundled real KITTI 00 frames).
 """
 from __future__ import annotations
 
@@ -46,21 +46,13 @@ TARGET_INDEX_EXACT = 0.999
 
 
 def default_dataset():
-    real = os.path.join(ROOT, "..", "shared", "data", "MyKITTI")
-    if os.path.isdir(real):
-        return os.path.normpath(real)
-    return os.path.join(ROOT, "target", "synthkitti")
+    return os.path.join(ROOT, "www", "demo", "MyKITTI")
 
 
 def ensure_dataset(ds):
     img0 = os.path.join(ds, "gray", "00", "image_0", "000000.png")
-    if os.path.exists(img0):
-        return
-    if os.path.normpath(ds) != os.path.normpath(os.path.join(ROOT, "target", "synthkitti")):
+    if not os.path.exists(img0):
         raise SystemExit("dataset %s has no gray/00/image_0/000000.png" % ds)
-    print("generating %s (100 frames) ..." % ds, file=sys.stderr)
-    subprocess.run([sys.executable, os.path.join(HERE, "gen_synthkitti.py"), "--out", ds, "--frames", "100",
-                    "--quiet"], check=True)
 
 
 def list_frames(ds, limit=None):
@@ -218,7 +210,7 @@ def run_getinfo(args, ds, frames, counts):
             ba[0] += 1
         else:
             if got_ok and p.stdout == want_n and want_n != want:
-                # the default wheel's own IPP exp/magnitude moved a descriptor by 1 (spec §14)
+                # the default wheel's own IPP exp/magnitude moved a descriptor by 1 (docs/fidelity.md §SIFT-14)
                 res["ipp_explained"] += 1
             if len(res["mismatches"]) < 100:
                 res["mismatches"].append({"cmd": " ".join(cmd), "want": want, "want_noipp": want_n, "got": p.stdout,

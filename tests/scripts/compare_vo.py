@@ -15,8 +15,7 @@ With --baseline (an older siftlab build) that binary runs in every round too (th
 builds alternating which runs first after OpenCV), and the per-round speed-up of --binary
 over it is reported (and whether both estimates are equal).
 
-The dataset defaults to ../shared/data/MyKITTI when it exists, else target/synthkitti
-(generate it with tests/scripts/gen_synthkitti.py --out target/synthkitti).
+The dataset defaults to www/demo/MyKITTI (the bundled real KITTI 00 frames, 0-99).
 Requires opencv-contrib-python-headless==4.8.0.76 and numpy<2.
 """
 from __future__ import annotations
@@ -52,16 +51,19 @@ def dist(a, b):
     return sum((x - y) ** 2 for x, y in zip(a, b)) ** 0.5
 
 
-def run_ours(binary, dataset, frames, tmp):
+def run_ours(binary, dataset, frames, tmp, counts=False):
+    """`view_trajectory FRAME_ID` runs frames 0..=FRAME_ID (the lab's count); a build from
+    before that change (counts=True, --baseline-counts) took the number of frames."""
     poses = os.path.join(tmp, "ours_poses.txt")
     png = os.path.join(tmp, "trajectory.png")
-    cmd = [binary, "-d", dataset, "view_trajectory", str(frames), "--save-poses", poses, "--output", png]
+    arg = frames if counts else frames - 1
+    cmd = [binary, "-d", dataset, "view_trajectory", str(arg), "--save-poses", poses, "--output", png]
     start = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True)
     elapsed = time.perf_counter() - start
     if proc.returncode != 0:
         raise SystemExit("siftlab failed (%d): %s" % (proc.returncode, proc.stderr.strip()[-2000:]))
-    return read_positions(poses), elapsed, proc.stdout.strip()
+    return read_positions(poses), elapsed, (proc.stdout + proc.stderr).strip()
 
 
 def main():
@@ -72,6 +74,8 @@ def main():
     ap.add_argument("--binary", default=os.path.join(REPO, "target", "release", "siftlab"))
     ap.add_argument("--baseline", default=None,
                     help="another siftlab binary (an older build) run in the same rounds, for the speed-up of a change")
+    ap.add_argument("--baseline-counts", action="store_true",
+                    help="the baseline takes view_trajectory N as a frame count (builds before the lab's count)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
 
@@ -99,7 +103,7 @@ def main():
                 builds.reverse()
             for build in builds:
                 if build == "base":
-                    base_pos, elapsed, _ = run_ours(args.baseline, dataset, frames, tmp)
+                    base_pos, elapsed, _ = run_ours(args.baseline, dataset, frames, tmp, args.baseline_counts)
                     t_base.append(elapsed)
                 else:
                     our_pos, elapsed, our_text = run_ours(args.binary, dataset, frames, tmp)

@@ -3,13 +3,14 @@
 
 Needs exactly:  pip install opencv-contrib-python-headless==4.8.0.76 "numpy<2"
 
-Writes, for frames 000000..000005 of the dataset (default: the committed tests/fixtures/mykitti):
+Writes, for frames 000000..000005 and the lab manual's example frames 000119, 000120, 000149,
+000150 of the dataset (default: the bundled real KITTI frames, www/demo/MyKITTI):
 
   golden/ipp/NNNNNN.sift     SIFT (nfeatures=1500) with the default wheel (IPP on)
   golden/noipp/NNNNNN.sift   the same with OPENCV_IPP=disabled set before cv2 is imported and
                              cv2.setNumThreads(1) (run in a subprocess: IPP is chosen at import)
   golden/meta.json           wheel, CPU, and the SIMD width (lanes) OpenCV's SIFT kernels ran with
-  golden/get_info.jsonl      seeded random get_info draws (+ edge cases) over frame pairs 1..5,
+  golden/get_info.jsonl      seeded random get_info draws (+ edge cases) over frame pairs 1..5, 120, 150,
                              stdout computed by lab_reference.py with the default wheel
 
 .sift format (little-endian):
@@ -20,12 +21,13 @@ Writes, for frames 000000..000005 of the dataset (default: the committed tests/f
 get_info.jsonl, one object a line:
   {"dataset_frame": F, "feature": i, "algo": "dt"|"nn"|"nndr", "threshold": t|null,
    "stdout": "vo params: ...\\ndebug run: ...\\nret value: ...\\nret count: 3\\n"}
-  where the dataset string printed is --label (default "tests/fixtures/mykitti"), i.e. what
-  `siftlab -d tests/fixtures/mykitti get_info ...` run from the repository root must print.
+  where the dataset string printed is --label (default "www/demo/MyKITTI"), i.e. what
+  `siftlab -d www/demo/MyKITTI get_info ...` run from the repository root must print.
 
-Two sets are committed, each written on a CPU of its kind (meta.json says which):
+Two sets are committed, each written on a CPU of its kind (meta.json says which, and on which
+dataset); the default --out is the one that fits the CPU running the script:
   tests/fixtures/golden        an AVX-512 CPU: OpenCV's SIFT kernels 16 lanes wide
-  tests/fixtures/golden-avx2   an AVX2 CPU without AVX-512: 8 lanes (--out tests/fixtures/golden-avx2)
+  tests/fixtures/golden-avx2   an AVX2 CPU without AVX-512: 8 lanes
 
 Usage: python3 tests/scripts/gen_goldens.py [--dataset DIR] [--out DIR] [--draws 300] [--seed 24011]
 """
@@ -42,7 +44,9 @@ import sys
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(os.path.dirname(HERE))
 MAGIC = b"SIFTGLD1"
-FRAMES = range(0, 6)
+FRAMES = [0, 1, 2, 3, 4, 5, 119, 120, 149, 150]
+# get_info matches frame F-1 against frame F: the first five pairs and the manual's two.
+PAIRS = [1, 2, 3, 4, 5, 120, 150]
 OPENCV_VERSION = "4.8.0"
 
 
@@ -131,11 +135,11 @@ def draws(counts, n_draws, seed):
     rng = random.Random(seed)
     out = []
     for _ in range(n_draws):
-        f = rng.randint(1, 5)
-        out.append((f, *draw_case(rng, counts[f - 1])))
-    for f in range(1, 6):
-        last = counts[f - 1] - 1
-        mid = rng.randrange(counts[f - 1])
+        f = rng.choice(PAIRS)
+        out.append((f, *draw_case(rng, counts[f])))
+    for f in PAIRS:
+        last = counts[f] - 1
+        mid = rng.randrange(counts[f])
         for feat in (0, last, mid):
             out.append((f, feat, "dt", 0.0))
             out.append((f, feat, "nn", 0.0))
@@ -156,10 +160,11 @@ def gen_get_info(dataset, label, out_path, n_draws, seed):
 
     assert cv2.__version__ == OPENCV_VERSION
     cache = lab.FeatureCache()
-    counts = []
-    for f in range(0, 5):
-        kp, _ = cache.get(lab.frame_path(dataset, f))
-        counts.append(len(kp))
+    # counts[F]: keypoints of the query frame F-1 of pair F.
+    counts = {}
+    for f in PAIRS:
+        kp, _ = cache.get(lab.frame_path(dataset, f - 1))
+        counts[f] = len(kp)
     cases = draws(counts, n_draws, seed)
     n_nonempty = 0
     with open(out_path, "w") as fo:
@@ -178,9 +183,9 @@ def opencv_lanes(cpu_line: str) -> int:
     return 16 if "*AVX512-SKX" in cpu_line.split() else 8
 
 
-def write_meta(path):
+def write_meta(path, label):
     """What produced the goldens: the SIMD width changes angles/descriptors at the ulp level
-    (opencv-sift-4.8.md §13), so tests must reproduce the goldens' width, not the test host's."""
+    (docs/fidelity.md §SIFT-13), so tests must reproduce the goldens' width, not the test host's."""
     import cv2
     import numpy as np
 
@@ -198,6 +203,7 @@ def write_meta(path):
         "cpu_model": cpu,
         "opencv_cpu_features": line,
         "opencv_simd_lanes": opencv_lanes(line),
+        "dataset": label,
         "frames": ["%06d" % i for i in FRAMES],
         "sift": "cv2.SIFT_create(nfeatures=1500).detectAndCompute(cv2.imread(path, 0), None)",
     }
@@ -209,9 +215,10 @@ def write_meta(path):
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--dataset", default=os.path.join(ROOT, "tests", "fixtures", "mykitti"))
-    ap.add_argument("--out", default=os.path.join(ROOT, "tests", "fixtures", "golden"))
-    ap.add_argument("--label", default="tests/fixtures/mykitti", help="dataset string printed in get_info stdout")
+    ap.add_argument("--dataset", default=os.path.join(ROOT, "www", "demo", "MyKITTI"))
+    ap.add_argument("--out", default=None, help="default: tests/fixtures/golden on AVX-512, golden-avx2 on AVX2")
+    ap.add_argument("--label", default="www/demo/MyKITTI",
+                    help="dataset path from the repository root, printed in get_info stdout")
     ap.add_argument("--draws", type=int, default=300)
     ap.add_argument("--seed", type=int, default=24011)
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
@@ -224,7 +231,10 @@ def main(argv=None) -> int:
     if cv2.__version__ != OPENCV_VERSION:
         print("need opencv-contrib-python-headless==4.8.0.76 (have %s)" % cv2.__version__, file=sys.stderr)
         return 1
-    write_meta(os.path.join(a.out, "meta.json"))
+    if a.out is None:
+        lanes = opencv_lanes(cv2.getCPUFeaturesLine())
+        a.out = os.path.join(ROOT, "tests", "fixtures", "golden" if lanes == 16 else "golden-avx2")
+    write_meta(os.path.join(a.out, "meta.json"), a.label)
     run_worker(a.dataset, os.path.join(a.out, "ipp"), ipp=True)
     run_worker(a.dataset, os.path.join(a.out, "noipp"), ipp=False)
     gen_get_info(a.dataset, a.label, os.path.join(a.out, "get_info.jsonl"), a.draws, a.seed)

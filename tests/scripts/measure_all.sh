@@ -9,9 +9,8 @@
 #
 #   tests/scripts/measure_all.sh [--dataset DIR] [--frames N] [--no-browser]
 #
-# The dataset defaults to ../shared/data/MyKITTI when it exists (the real KITTI 00 frames),
-# else target/synthkitti (generated if missing). Each step's full output goes to
-# target/measure/<step>.txt; the summary lines are printed at the end.
+# The dataset defaults to www/demo/MyKITTI (the bundled real KITTI 00 frames). Each step's
+# full output goes to target/measure/<step>.txt; the summary lines are printed at the end.
 # Needs: pip install opencv-contrib-python-headless==4.8.0.76 "numpy<2"; node for step 4.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
@@ -28,12 +27,7 @@ while [ $# -gt 0 ]; do
     esac
 done
 if [ -z "$DATASET" ]; then
-    if [ -d ../shared/data/MyKITTI ]; then
-        DATASET="$(cd ../shared/data/MyKITTI && pwd)"
-    else
-        DATASET="$ROOT/target/synthkitti"
-        [ -d "$DATASET" ] || python3 tests/scripts/gen_synthkitti.py --out "$DATASET"
-    fi
+    DATASET="$ROOT/www/demo/MyKITTI"
 fi
 python3 -c 'import cv2, sys; sys.exit(cv2.__version__ != "4.8.0")' 2>/dev/null || {
     echo "measure_all.sh: needs OpenCV 4.8.0: pip install opencv-contrib-python-headless==4.8.0.76 \"numpy<2\"" >&2

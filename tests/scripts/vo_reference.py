@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The COMP24011 lab's monocular visual odometry on OpenCV 4.8 — the reference for
-`siftlab view_trajectory` (../shared/docs/opencv-vo-4.8.md §5).
+`siftlab view_trajectory` (docs/fidelity.md §VO-5).
 
     python3 vo_reference.py --dataset DIR [--frames N] [--out poses.txt] [--json]
 
@@ -14,7 +14,7 @@ frames per second of the whole loop (image reading included, as the lab runs it)
 the estimate in KITTI pose format, one line per frame from 0: the accumulated R and the position
 the lab draws (0 for frames 0 and 1). --json prints one JSON object instead.
 
-The dataset defaults to ../shared/data/MyKITTI when it exists, else target/synthkitti.
+The dataset defaults to www/demo/MyKITTI (the bundled real KITTI 00 frames).
 Requires opencv-contrib-python-headless==4.8.0.76 and numpy<2.
 """
 from __future__ import annotations
@@ -38,10 +38,7 @@ REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 
 
 def default_dataset() -> str:
-    shared = os.path.join(REPO, "..", "shared", "data", "MyKITTI")
-    if os.path.isdir(shared):
-        return os.path.normpath(shared)
-    return os.path.join(REPO, "target", "synthkitti")
+    return os.path.join(REPO, "www", "demo", "MyKITTI")
 
 
 def frame_path(dataset: str, i: int) -> str:
@@ -120,7 +117,7 @@ def write_poses(path, positions, rotations):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--dataset", default=None, help="MyKITTI layout (default: ../shared/data/MyKITTI, else target/synthkitti)")
+    ap.add_argument("--dataset", default=None, help="MyKITTI layout (default: www/demo/MyKITTI)")
     ap.add_argument("--frames", type=int, default=None, help="number of frames from 0 (default: all)")
     ap.add_argument("--out", default=None, help="write the estimated poses here (KITTI format)")
     ap.add_argument("--json", action="store_true", help="print one JSON object")

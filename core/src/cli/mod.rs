@@ -65,7 +65,8 @@ pub struct MatchArgs {
 
 #[derive(Args, Debug)]
 pub struct TrajectoryArgs {
-    /// How many frames to run, from frame 0 (like range(N); default: every frame).
+    /// The last frame: frames 0 to FRAME_ID inclusive, as the lab counts
+    /// (default: every frame of the dataset).
     pub frame_id: Option<String>,
     /// Also write the estimated poses in KITTI format (12 numbers a line).
     #[arg(long = "save-poses")]
@@ -137,18 +138,24 @@ pub fn run(cli: &Cli) -> Result<()> {
             visual::view_info(&ctx, &info, Path::new("custom_visual.png"))
         }
         Command::ViewTrajectory(a) => {
-            let frames = match &a.frame_id {
+            let last = match &a.frame_id {
                 None => None,
                 Some(s) => Some(parse_index(s, "FRAME_ID")?),
             };
+            // The lab's three stdout lines; progress and siftlab's own summary
+            // go to stderr, so stdout compares with the lab's as it is.
+            let args = last.map_or(String::new(), |l| format!("{l},"));
+            println!("vo params: (None, None, {})", py_str(&cli.dataset));
+            println!("debug run: view_trajectory({args})");
+            let _ = std::io::stdout().flush();
             let root = expand_home(&cli.dataset);
-            let mut last = std::time::Instant::now();
+            let mut last_draw = std::time::Instant::now();
             // Whether the bar's line is open: an error must start on a line
             // of its own, not after "1/3 frames".
             let mut open = false;
             let mut progress = |done: usize, total: usize| {
-                if done == total || last.elapsed().as_millis() >= 100 {
-                    last = std::time::Instant::now();
+                if done == total || last_draw.elapsed().as_millis() >= 100 {
+                    last_draw = std::time::Instant::now();
                     open = done != total;
                     let w = 40;
                     let filled = if total == 0 { w } else { done * w / total };
@@ -158,11 +165,13 @@ pub fn run(cli: &Cli) -> Result<()> {
                     }
                 }
             };
+            let frames = last.map(|l| l + 1);
             let result = trajectory::view_trajectory(&root, frames, a.save_poses.as_deref(), &a.output, &mut progress);
             if open && result.is_err() {
                 eprintln!();
             }
-            println!("{}", result?);
+            eprintln!("{}", result?);
+            println!("ret value: None");
             Ok(())
         }
         Command::Sift(a) => run_sift(cli, a),

@@ -1,5 +1,5 @@
 //! L2 distances between SIFT descriptors as `cv2.BFMatcher()` computes them
-//! (spec §16): OpenCV sums float squares, but every partial sum of squared
+//! (docs/fidelity.md §SIFT-16): OpenCV sums float squares, but every partial sum of squared
 //! 0..255 differences is an integer below 2^24, so the float sum is exact and
 //! equals this integer sum; the distance is its correctly rounded f32 sqrt.
 //!

@@ -1,4 +1,4 @@
-//! `BFMatcher().knnMatch(query, train, k)` (spec §16).
+//! `BFMatcher().knnMatch(query, train, k)` (docs/fidelity.md §SIFT-16).
 
 use super::distance::{distance_rows, TrainSet};
 

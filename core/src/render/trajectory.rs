@@ -200,7 +200,7 @@ mod lab_reference {
 
     /// Fixture truth and gen_refs.py traj()'s made-up estimate.
     fn paths() -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
-        let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/mykitti/poses/00.txt")).unwrap();
+        let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/synthetic/poses/00.txt")).unwrap();
         let truth: Vec<[f64; 3]> = text
             .lines()
             .map(|l| {

@@ -1,5 +1,5 @@
 //! GaussianBlur for f32 images exactly as OpenCV 4.8's generic FilterEngine
-//! runs it for SIFT (spec §3): bit-exact kernel, row pass then symmetric
+//! runs it for SIFT (docs/fidelity.md §SIFT-3): bit-exact kernel, row pass then symmetric
 //! column pass, BORDER_REFLECT_101.
 
 use super::image::Plane;

@@ -1,4 +1,4 @@
-//! The 128-value descriptor, `calcSIFTDescriptor` (spec §11): a 4×4 grid of
+//! The 128-value descriptor, `calcSIFTDescriptor` (docs/fidelity.md §SIFT-11): a 4×4 grid of
 //! 8-bin orientation histograms with trilinear interpolation, clipped at
 //! 0.2 and scaled to integers 0..255.
 
@@ -700,11 +700,12 @@ fn normalize(raw: &mut [f32; 128], lanes: usize) -> [u8; 128] {
     let mut n2 = 0f32;
     for v in raw.iter_mut() {
         *v = v.min(thr);
-        // A separate multiply and add, not the FMA spec §11 gives: GCC does
-        // not contract this loop in either build. Measured against the wheel
-        // with IPP off on 100 synthetic KITTI frames: the FMA form put 8 of
-        // 150,041 rows off by one on an AVX-512 CPU and 7 on an AVX2 CPU;
-        // this form none on either (a test below holds one of the 7).
+        // A separate multiply and add (docs/fidelity.md §SIFT-11, second norm):
+        // OpenCV's source reads as an FMA, but GCC does not contract this
+        // loop in either build. Measured against the wheel with IPP off on
+        // 100 synthetic KITTI frames: the FMA form put 8 of 150,041 rows off
+        // by one on an AVX-512 CPU and 7 on an AVX2 CPU; this form none on
+        // either (a test below holds one of the 7).
         n2 += *v * *v;
     }
     let s = INT_DESCR_FCTR / n2.sqrt().max(FLT_EPSILON);
@@ -719,10 +720,12 @@ fn normalize(raw: &mut [f32; 128], lanes: usize) -> [u8; 128] {
 mod tests {
     use super::normalize;
 
-    /// Keypoint 990 of synthetic KITTI frame 27 (`gen_synthkitti.py --seed 0`),
+    /// Keypoint 990 of frame 27 of a synthetic KITTI-like sequence (the renderer
+    /// that made it was retired once the real frames were bundled),
     /// the histogram our descriptor builds for it and the row OpenCV 4.8.0.76
     /// (`OPENCV_IPP=disabled`, an AVX2 CPU: 8 lanes) returns. Normalising with
-    /// spec §11's FMA in the second norm gives 45 at element 32; OpenCV gives 46.
+    /// an FMA in the second norm (as OpenCV's source reads) gives 45 at
+    /// element 32; OpenCV gives 46.
     const RAW_BITS: [u32; 128] = [
         0x421d434a, 0x415e6fff, 0x408b6087, 0x41135d28, 0x423fd148, 0x412cabf8, 0x408a4f5b, 0x3fe6a268,
         0x43aae13c, 0x422d3bb6, 0x4040d82f, 0x403cae56, 0x40bf16bc, 0x3e95f8c1, 0x411d20b2, 0x4253cc55,

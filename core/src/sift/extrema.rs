@@ -1,5 +1,5 @@
 //! Scale-space extrema: the 26-neighbour scan, sub-pixel refinement with
-//! OpenCV's exact arithmetic, contrast and edge tests (spec §6, §7).
+//! OpenCV's exact arithmetic, contrast and edge tests (docs/fidelity.md §SIFT-6, §SIFT-7).
 
 use super::image::Plane;
 use super::num::{fma, rne, rne64};
@@ -37,7 +37,7 @@ fn dog(levels: &[Plane], j: usize) -> Dog<'_> {
 }
 
 /// Finds the keypoints of octave `o`, rows `[r0, r1)` of its DoG layers
-/// 1..=nl, appending them with every orientation peak (unordered; §10
+/// 1..=nl, appending them with every orientation peak (unordered; §SIFT-10
 /// sorts).
 ///
 /// OpenCV scans one stored DoG image at a time. The DoG rows come instead
@@ -506,7 +506,7 @@ fn derivs(cur: Dog, prev: Dog, next: Dog, r: usize, c: usize) -> Derivs {
 }
 
 /// `Matx33f::solve(DECOMP_LU)`: Cramer's rule with the common subexpressions
-/// and fusions GCC produced (spec §7). Returns the offsets (xc, xr, xi).
+/// and fusions GCC produced (docs/fidelity.md §SIFT-7). Returns the offsets (xc, xr, xi).
 #[inline(always)]
 fn solve_offsets(g: &Derivs) -> (f32, f32, f32) {
     let Derivs { d, dxx, dyy, dss, dxy, dxs, dys } = *g;

@@ -1,4 +1,4 @@
-//! `createInitialImage` with doubleImageSize = true (spec §2).
+//! `createInitialImage` with doubleImageSize = true (docs/fidelity.md §SIFT-2).
 
 use super::blur::{gaussian_blur_rows, Rows};
 use super::image::Plane;

@@ -1,16 +1,16 @@
 //! SIFT exactly as OpenCV 4.8.0 computes it
 //! (`cv2.SIFT_create(nfeatures=1500).detectAndCompute(gray, None)`), stage by
-//! stage as `../shared/docs/opencv-sift-4.8.md` specifies:
+//! stage as `docs/fidelity.md` describes it:
 //!
-//! 1. [`initial`] — float, ×2 bilinear upsample, blur to σ = 1.6 (§2)
-//! 2. [`blur`] — the bit-exact Gaussian kernel and separable filter (§3)
-//! 3. [`pyramid`] — the Gaussian pyramid (§4); DoG rows are taken in the scan (§5)
-//! 4. [`extrema`] — DoG rows, 26-neighbour scan and sub-pixel refinement (§5–§7)
-//! 5. [`orientation`] — 36-bin orientation histogram peaks (§8)
-//! 6. [`order`] — dedup, `retainBest` via libstdc++ introselect, rescale (§10)
-//! 7. [`descriptor`] — 4×4×8 histograms, clipped, scaled to 0..255 (§11)
+//! 1. [`initial`] — float, ×2 bilinear upsample, blur to σ = 1.6 (§SIFT-2)
+//! 2. [`blur`] — the bit-exact Gaussian kernel and separable filter (§SIFT-3)
+//! 3. [`pyramid`] — the Gaussian pyramid (§SIFT-4); DoG rows are taken in the scan (§SIFT-5)
+//! 4. [`extrema`] — DoG rows, 26-neighbour scan and sub-pixel refinement (§SIFT-5 to §SIFT-7)
+//! 5. [`orientation`] — 36-bin orientation histogram peaks (§SIFT-8)
+//! 6. [`order`] — dedup, `retainBest` via libstdc++ introselect, rescale (§SIFT-10)
+//! 7. [`descriptor`] — 4×4×8 histograms, clipped, scaled to 0..255 (§SIFT-11)
 //!
-//! [`num`] holds the exact math kernels (§12) and the FMA used throughout.
+//! [`num`] holds the exact math kernels (§SIFT-12) and the FMA used throughout.
 
 pub mod blur;
 pub mod descriptor;
@@ -61,7 +61,7 @@ pub struct Features {
 
 /// `cv2.SIFT_create` parameters. `opencv_lanes` is the SIMD width OpenCV's
 /// dispatched SIFT kernels ran with on the reference machine (8 on AVX2, 16
-/// on AVX-512 CPUs, spec §13); it changes angles and descriptors at the ulp
+/// on AVX-512 CPUs, docs/fidelity.md §SIFT-13); it changes angles and descriptors at the ulp
 /// level only.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SiftParams {
@@ -146,7 +146,7 @@ fn find_keypoints(ss: &ScaleSpace, p: &SiftParams) -> Vec<KeyPoint> {
     in_opencv_order(kps, p)
 }
 
-/// §10: duplicates removed from the sorted keypoints, the best `nfeatures`
+/// §SIFT-10: duplicates removed from the sorted keypoints, the best `nfeatures`
 /// kept, first-octave coordinates halved.
 fn in_opencv_order(mut kps: Vec<KeyPoint>, p: &SiftParams) -> Vec<KeyPoint> {
     order::remove_duplicated_sorted(&mut kps);
@@ -158,7 +158,7 @@ fn in_opencv_order(mut kps: Vec<KeyPoint>, p: &SiftParams) -> Vec<KeyPoint> {
 }
 
 /// Runs `f` over the jobs, on scoped threads natively; results are
-/// concatenated (their order does not matter: §10 sorts everything).
+/// concatenated (their order does not matter: §SIFT-10 sorts everything).
 fn run_parallel<J: Sync>(jobs: &[J], f: impl Fn(&J, &mut Vec<KeyPoint>) + Sync, out: &mut Vec<KeyPoint>) {
     #[cfg(not(target_arch = "wasm32"))]
     {
@@ -210,7 +210,7 @@ pub fn detect(img: &GrayImage, p: &SiftParams) -> Vec<KeyPoint> {
     // the next octave's are taken, so a worker holds one octave (45 MB on
     // KITTI's first) instead of the whole pyramid (60 MB): peak RSS of a
     // 99-frame `view_trajectory` 140 → 114 MB. Without descriptors nothing
-    // reads an octave after its scan. Same keypoints: §10 sorts them all.
+    // reads an octave after its scan. Same keypoints: §SIFT-10 sorts them all.
     let base = initial::initial_image(img, p.sigma);
     let octaves = pyramid::octave_count(base.width, base.height);
     let sig = pyramid::level_sigmas(p.sigma, p.n_octave_layers);

@@ -1,9 +1,9 @@
-//! The exact scalar kernels OpenCV's SIFT is built from (spec §12), and the one
-//! fused multiply-add every stage uses.
+//! The exact scalar kernels OpenCV's SIFT is built from (docs/fidelity.md
+//! §SIFT-12), and the one fused multiply-add every stage uses.
 
 /// A fused multiply-add with a single rounding: `a * b + c`.
 ///
-/// OpenCV's AVX2 kernels and GCC's contraction fuse exactly where the spec says
+/// OpenCV's AVX2 kernels and GCC's contraction fuse exactly where docs/fidelity.md says
 /// `fma`, so a separate multiply and add would be off by an ulp there.
 /// On x86-64 with FMA compiled in this is one instruction; elsewhere native
 /// targets call the C library's `fmaf` (hardware via ifunc on glibc).
@@ -202,7 +202,7 @@ pub fn floor(x: f32) -> i32 {
 pub const FLT_EPSILON: f32 = f32::EPSILON;
 
 /// `powf(2.0f, y)` bit for bit as glibc computes it for the keypoint size
-/// (spec §7 asks for glibc's powf). Natively we call it; WebAssembly's libm
+/// (docs/fidelity.md §SIFT-7 asks for glibc's powf). Natively we call it; WebAssembly's libm
 /// powf is another algorithm (1-ulp differences), so there we evaluate
 /// glibc's own method: for x = 2 its log2 step is exactly 1.0 (table entry
 /// invc = 1, logc = 0), leaving `exp2_inline(y)`: a 32-entry table of
@@ -521,7 +521,7 @@ const ATAN_P5: f32 = f32::from_bits(0x410E9FBF);
 const ATAN_P7: f32 = f32::from_bits(0xC0228AD9);
 const ATAN_EPS: f32 = f32::from_bits(0x25800000); // 2^-52 as f32
 
-/// OpenCV's `fastAtan2` in degrees, [0, 360) (spec §12; no IPP, fully exact).
+/// OpenCV's `fastAtan2` in degrees, [0, 360) (docs/fidelity.md §SIFT-12; no IPP, fully exact).
 #[inline(always)]
 pub fn fast_atan2_deg(y: f32, x: f32) -> f32 {
     let ax = x.abs();
@@ -562,7 +562,7 @@ const EXP_A2: f32 = f32::from_bits(0x41C6BB64);
 const EXP_A3: f32 = f32::from_bits(0x428F5AD6);
 const EXP_A4: f32 = f32::from_bits(0x42CED13A);
 
-/// `cv::hal::exp32f` with IPP disabled (spec §12). The default wheel uses
+/// `cv::hal::exp32f` with IPP disabled (docs/fidelity.md §SIFT-12). The default wheel uses
 /// IPP's closed-source exp instead, which no formula reproduces; this is the
 /// reason angles can differ from that wheel at the 1e-5 degree level.
 #[inline(always)]

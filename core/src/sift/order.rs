@@ -1,4 +1,4 @@
-//! The output order (spec §10): `removeDuplicatedSorted`, then
+//! The output order (docs/fidelity.md §SIFT-10): `removeDuplicatedSorted`, then
 //! `KeyPointsFilter::retainBest` with libstdc++'s `nth_element`
 //! (introselect) and `partition`, then the firstOctave = −1 rescale.
 //!

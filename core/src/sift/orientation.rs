@@ -1,4 +1,4 @@
-//! Orientation assignment, `calcOrientationHist` (spec §8): a 36-bin
+//! Orientation assignment, `calcOrientationHist` (docs/fidelity.md §SIFT-8): a 36-bin
 //! gradient histogram around the refined pixel, smoothed, one keypoint per
 //! peak above 80% of the maximum.
 

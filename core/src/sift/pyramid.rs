@@ -1,4 +1,4 @@
-//! Gaussian and difference-of-Gaussians pyramids (spec §4, §5).
+//! Gaussian and difference-of-Gaussians pyramids (docs/fidelity.md §SIFT-4, §SIFT-5).
 
 use super::blur::gaussian_blur;
 use super::image::Plane;

@@ -1,6 +1,6 @@
 //! The five-point essential-matrix kernel OpenCV 4.8's `findEssentialMat`
 //! runs inside RANSAC (Bo Li's implementation of Nistér's solver,
-//! opencv-vo-4.8.md §3.4): null space of the 5×9 design matrix by OpenCV's
+//! docs/fidelity.md §VO-3.4): null space of the 5×9 design matrix by OpenCV's
 //! Jacobi SVD (with its seeded completion), the ten cubic constraints, the
 //! Gauss–Jordan elimination by the small LU inverse, the 3×13 matrix B, its
 //! degree-10 determinant, Durand–Kerner roots, and back-substitution.
@@ -126,8 +126,8 @@ fn sub_q(a: &Quad, b: &Quad) -> Quad {
 }
 
 /// The 10×20 constraint matrix for `E = x·Ea + y·Eb + z·Ec + Ed`: the nine
-/// entries of `2·E·Eᵀ·E − trace(E·Eᵀ)·E` and `det E` (the spec allows any row
-/// order and scaling; this is the exact-arithmetic construction of §3.8).
+/// entries of `2·E·Eᵀ·E − trace(E·Eᵀ)·E` and `det E` (§VO-3.4 allows any row
+/// order and scaling; this is the exact-arithmetic construction of §VO-3.8).
 fn constraints(basis: &[[f64; 9]; 4]) -> [[f64; 20]; 10] {
     let e: [[Lin; 3]; 3] = std::array::from_fn(|r| {
         std::array::from_fn(|c| std::array::from_fn(|k| basis[k][r * 3 + c]))

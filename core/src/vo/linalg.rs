@@ -1,5 +1,5 @@
 //! The three small numeric routines OpenCV's five-point solver, RANSAC and
-//! recoverPose run through (opencv-vo-4.8.md §3.5–3.7): its one-sided Jacobi
+//! recoverPose run through (docs/fidelity.md §VO-3.5 to §VO-3.7): its one-sided Jacobi
 //! SVD with the seeded null-space completion, the small LU inverse and the
 //! Durand–Kerner `solvePoly`. All of them live in OpenCV files compiled for the
 //! baseline ISA, so every operation here is a plain f64 operation (no FMA).
@@ -44,7 +44,7 @@ pub struct Svd {
     pub vrows: usize,
 }
 
-/// `JacobiSVDImpl_<double>` (§3.5). `at` holds `n1` working vectors of length
+/// `JacobiSVDImpl_<double>` (§VO-3.5). `at` holds `n1` working vectors of length
 /// `m` (only the first `n` are data; the rest are generated when `n1 > n`),
 /// `vt` receives the n×n rotation accumulator. `w` gets the n singular values.
 #[inline(always)]
@@ -245,7 +245,7 @@ pub fn null_vector_4x4(a: &[[f64; 4]; 4]) -> [f64; 4] {
     [vt[12], vt[13], vt[14], vt[15]]
 }
 
-/// `cv::invert(A, DECOMP_LU)` for an n×n block (§3.6): `LUImpl<double>`
+/// `cv::invert(A, DECOMP_LU)` for an n×n block (§VO-3.6): `LUImpl<double>`
 /// against the identity. Returns `None` where OpenCV would return an all-zero
 /// inverse (pivot below 100·DBL_EPSILON).
 pub fn lu_inverse(a: &[f64], n: usize) -> Option<Vec<f64>> {
@@ -329,7 +329,7 @@ impl Complex {
     }
 }
 
-/// `cv::solvePoly` (§3.7): Durand–Kerner with in-place updates. `c[k]` is the
+/// `cv::solvePoly` (§VO-3.7): Durand–Kerner with in-place updates. `c[k]` is the
 /// coefficient of z^k. Returns the roots in index order.
 pub fn solve_poly(c: &[f64], max_iters: usize) -> Vec<Complex> {
     durand_kerner(c, max_iters, true).0

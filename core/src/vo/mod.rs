@@ -1,5 +1,5 @@
 //! The lab's monocular visual odometry, stage by stage as OpenCV 4.8 computes
-//! it (`../shared/docs/opencv-vo-4.8.md`): [`lk`] tracks points
+//! it (`docs/fidelity.md` §VO-1 to §VO-7): [`lk`] tracks points
 //! (`calcOpticalFlowPyrLK`), [`ransac`] estimates the essential matrix with the
 //! [`five_point`] kernel (`findEssentialMat`), [`recover_pose`](fn@recover_pose) picks R, t
 //! (`recoverPose`), [`odometry`] is the lab's accumulation loop, [`metrics`]
@@ -72,7 +72,7 @@ impl Camera {
     }
 
     /// Pixel → normalized coordinates as findEssentialMat/recoverPose do on
-    /// an AVX2 build (§3.2): `fma(x, 1/f, (−c)·(1/f))`, one rounding.
+    /// an AVX2 build (docs/fidelity.md §VO-3.2): `fma(x, 1/f, (−c)·(1/f))`, one rounding.
     #[inline]
     pub fn normalize(&self, p: [f32; 2]) -> [f64; 2] {
         let (ax, ay) = (1.0 / self.fx, 1.0 / self.fy);

@@ -1,4 +1,4 @@
-//! The lab's trajectory loop (opencv-vo-4.8.md §5) as a step API: feed frames
+//! The lab's trajectory loop (docs/fidelity.md §VO-5) as a step API: feed frames
 //! in order with their ground-truth pose, get the position after each one.
 //!
 //! ```text
@@ -357,7 +357,7 @@ fn run_with_workers(
                 from_workers.push(rx_det);
                 s.spawn(move || {
                     for (i, frame) in rx_img {
-                        // Frame 1 never re-detects (§5: it only sets R, t).
+                        // Frame 1 never re-detects (§VO-5: it only sets R, t).
                         let item = frame.map(|img| {
                             let points = (first + i != 1).then(|| {
                                 crate::sift::par::with_threads(per_worker, || detector_ref(&img))

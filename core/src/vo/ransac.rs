@@ -1,5 +1,5 @@
 //! `cv2.findEssentialMat(points1, points2, focal, pp, cv2.RANSAC, 0.999, 1.0)`
-//! in OpenCV 4.8 (opencv-vo-4.8.md §3.1–3.3): the old
+//! in OpenCV 4.8 (docs/fidelity.md §VO-3.1 to §VO-3.3): the old
 //! `RANSACPointSetRegistrator` with `cv::RNG` seeded to 2^64−1 on every call,
 //! 5-distinct-index sampling by rejection, Sampson error rounded to f32,
 //! strict-greater model replacement and `RANSACUpdateNumIters`. No refinement:

@@ -1,5 +1,5 @@
 //! `cv2.recoverPose(E, points1, points2, focal=..., pp=...)` in OpenCV 4.8
-//! (opencv-vo-4.8.md §4): decomposeEssentialMat by the Jacobi SVD, the four
+//! (docs/fidelity.md §VO-4): decomposeEssentialMat by the Jacobi SVD, the four
 //! candidates in OpenCV's order, DLT triangulation and the cheirality /
 //! distance (50) votes of every point (the lab passes no mask).
 
@@ -47,7 +47,7 @@ pub fn decompose_essential(e: &Mat3) -> (Mat3, Mat3, Vec3) {
 
 /// Whether the point triangulated with `P0 = [I|0]` and `P = [R|t]`, and the
 /// one triangulated with `[R|−t]`, lie in front of both cameras and closer
-/// than `dist` (the tests of §4 step 4).
+/// than `dist` (the tests of §VO-4 step 4).
 ///
 /// One SVD serves both: the DLT matrix of `[R|−t]` is that of `[R|t]` with
 /// its last column negated, and every step of the Jacobi SVD commutes
@@ -196,7 +196,7 @@ mod tests {
         let (r1, r2, t) = decompose_essential(e.essential().unwrap());
         let nt = [-t[0], -t[1], -t[2]];
         // The golden scene (inliers and outliers) plus points scattered over
-        // the frame and beyond, so every test of §4 passes and fails somewhere,
+        // the frame and beyond, so every test of §VO-4 passes and fails somewhere,
         // with short distance thresholds to hit `Z < dist` both ways.
         let mut a: Vec<[f64; 2]> = p1.iter().map(|&p| cam.normalize(p)).collect();
         let mut b: Vec<[f64; 2]> = p2.iter().map(|&p| cam.normalize(p)).collect();

@@ -1,5 +1,6 @@
-//! The OpenCV goldens of the fixture frames (`tests/fixtures/golden`), shared
-//! by the golden test binaries. Format: see `golden.rs`.
+//! The OpenCV goldens (`tests/fixtures/golden-avx2` on the bundled KITTI
+//! frames, `tests/fixtures/golden` on synthetic frames), shared by the golden
+//! test binaries. Format: see `golden.rs`.
 
 #![allow(dead_code)] // each test binary uses its own part
 
@@ -10,16 +11,19 @@ use siftlab_core::sift::{KeyPoint, SiftParams};
 
 use super::json_mini;
 
-/// One committed set of OpenCV goldens for the fixture frames, written by
-/// `tests/scripts/gen_goldens.py --out DIR` on one CPU: `noipp/`, `ipp/`,
-/// `get_info.jsonl` and `meta.json`, which records the SIMD width OpenCV's
-/// dispatched SIFT kernels ran with (spec §13: 16 on AVX-512, 8 on AVX2). The
-/// width is taken from there, not from the host, so a test means the same on
-/// any CPU.
+/// One committed set of OpenCV goldens, written by
+/// `tests/scripts/gen_goldens.py` on one CPU: `noipp/`, `ipp/`,
+/// `get_info.jsonl` and `meta.json`, which records the dataset the goldens
+/// were computed on and the SIMD width OpenCV's dispatched SIFT kernels ran
+/// with (docs/fidelity.md §SIFT-13: 16 on AVX-512, 8 on AVX2). The width is taken from there,
+/// not from the host, so a test means the same on any CPU.
 pub struct GoldenSet {
     /// The folder below `tests/fixtures` (`golden`, `golden-avx2`).
     pub name: &'static str,
     pub lanes: usize,
+    /// The dataset the goldens were computed on, as the repository-relative
+    /// path `get_info.jsonl` prints (`www/demo/MyKITTI`).
+    pub dataset: String,
 }
 
 impl GoldenSet {
@@ -29,7 +33,18 @@ impl GoldenSet {
         let meta = json_mini::parse(&meta).expect("meta.json is JSON");
         let lanes = meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("meta.json: opencv_simd_lanes") as usize;
         assert!(matches!(lanes, 8 | 16), "{name}/meta.json: opencv_simd_lanes {lanes}");
-        GoldenSet { name, lanes }
+        let dataset = meta.get("dataset").and_then(|v| v.str()).expect("meta.json: dataset").to_owned();
+        GoldenSet { name, lanes, dataset }
+    }
+
+    /// The golden dataset's folder.
+    pub fn dataset_dir(&self) -> PathBuf {
+        repo_root().join(&self.dataset)
+    }
+
+    /// The frame a golden was computed from (`id` as `000150`).
+    pub fn frame_path(&self, id: &str) -> PathBuf {
+        self.dataset_dir().join(format!("gray/00/image_0/{id}.png"))
     }
 
     pub fn dir(&self) -> PathBuf {
@@ -49,16 +64,18 @@ impl GoldenSet {
     }
 }
 
-/// The primary set (`golden/`, written on an AVX-512 CPU: 16 lanes).
+/// The primary set (`golden-avx2/`: the bundled real KITTI frames, written on
+/// an AVX2 CPU, 8 lanes: the width of most students' laptops, the app's
+/// default and OpenCV's validated configuration).
 pub fn primary_set() -> GoldenSet {
-    GoldenSet::new("golden")
+    GoldenSet::new("golden-avx2")
 }
 
-/// Every committed set: the primary one and `golden-avx2/` (an AVX2 CPU, 8
-/// lanes: the width of most students' laptops and the spec's validated
-/// configuration).
+/// Every committed set: the primary one and `golden/` (an AVX-512 CPU, 16
+/// lanes; on the synthetic frames of `tests/fixtures/synthetic` until it is
+/// regenerated on an AVX-512 CPU).
 pub fn golden_sets() -> Vec<GoldenSet> {
-    let sets = vec![primary_set(), GoldenSet::new("golden-avx2")];
+    let sets = vec![primary_set(), GoldenSet::new("golden")];
     assert_ne!(sets[0].lanes, sets[1].lanes, "the golden sets should cover both SIMD widths");
     sets
 }
@@ -80,7 +97,16 @@ pub struct Golden {
 }
 
 pub fn fixtures() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures")
+    repo_root().join("tests/fixtures")
+}
+
+pub fn repo_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The bundled real KITTI data (`www/demo/MyKITTI`).
+pub fn kitti() -> PathBuf {
+    repo_root().join("www/demo/MyKITTI")
 }
 
 pub fn parse_golden(bytes: &[u8], name: &str) -> Golden {

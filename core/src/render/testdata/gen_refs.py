@@ -56,7 +56,7 @@ def traj():
     """The lab's showDrive loop (truth from the fixture poses, a made-up
     estimate) on its 600x600 canvas; the caption text is Hershey, which the
     Rust side does not reproduce, so tests skip the band rows 20..60."""
-    poses = os.path.join(HERE, "..", "..", "..", "..", "tests", "fixtures", "mykitti", "poses", "00.txt")
+    poses = os.path.join(HERE, "..", "..", "..", "..", "tests", "fixtures", "synthetic", "poses", "00.txt")
     traj = np.zeros((600, 600, 3), dtype=np.uint8)
     for i, line in enumerate(open(poses)):
         v = [float(s) for s in line.split()]

@@ -1,6 +1,6 @@
 //! `cv2.calcOpticalFlowPyrLK(prev, next, pts, None, winSize=(21,21),
 //! criteria=(EPS|COUNT, 30, 0.01))` as OpenCV 4.8 computes it
-//! (opencv-vo-4.8.md §2): the integer pyramid (pyrDown), the unscaled Scharr
+//! (docs/fidelity.md §VO-2): the integer pyramid (pyrDown), the unscaled Scharr
 //! derivatives, and the fixed-point Lucas-Kanade iteration with the f32
 //! accumulation orders of OpenCV's 128-bit SIMD loops. All of this is baseline
 //! code in OpenCV (no FMA), so every f32 operation below rounds separately.
@@ -359,7 +359,7 @@ fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut
 }
 
 /// The three structure-tensor sums over the window in the order OpenCV's
-/// SSE loop plus scalar tail produce (§2.4 "Structure tensor"): columns
+/// SSE loop plus scalar tail produce (§VO-2.4 "Structure tensor"): columns
 /// 0..15 into four f32 lanes (column c → lane c mod 4, columns in increasing
 /// order), columns 16..20 into a scalar, then `S + ((L0 + L2) + (L1 + L3))`.
 #[inline(always)]
@@ -385,7 +385,7 @@ fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
     (total(s11, l11), total(s12, l12), total(s22, l22))
 }
 
-/// The mismatch vector (b1, b2) in OpenCV's SIMD order (§2.4 step 3): pairs
+/// The mismatch vector (b1, b2) in OpenCV's SIMD order (§VO-2.4 step 3): pairs
 /// of products `d(c)·Z(c) + d(c+4)·Z(c+4)` added as exact integers, then
 /// rounded into eight f32 lanes (P0..P3 = x/y of columns B, B+1; Q0..Q3 =
 /// x/y of columns B+2, B+3); columns 16..20 into two scalars.
@@ -1079,17 +1079,17 @@ mod tests {
     include!("../testdata/lk_golden.rs");
 
     /// The AVX2 tracker against the portable one on a KITTI-sized pair (the
-    /// committed synthetic frames 0 → 1), on a grid of 640 points covering
+    /// bundled KITTI frames 0 → 1), on a grid of 640 points covering
     /// borders, flat sky and texture: same positions, status and err, bit for
     /// bit (the kernel-level test covers the replay path on purpose).
     #[test]
     fn avx2_equals_portable_on_a_kitti_sized_pair() {
         let prev = GrayImage::decode(include_bytes!(
-            "../../../../tests/fixtures/mykitti/gray/00/image_0/000000.png"
+            "../../../../www/demo/MyKITTI/gray/00/image_0/000000.png"
         ))
         .unwrap();
         let next = GrayImage::decode(include_bytes!(
-            "../../../../tests/fixtures/mykitti/gray/00/image_0/000001.png"
+            "../../../../www/demo/MyKITTI/gray/00/image_0/000001.png"
         ))
         .unwrap();
         let mut pts = Vec::new();

@@ -13,7 +13,7 @@
 //!
 //! so one multiply-add of a pair of positions (`vpmaddwd`,
 //! `i32x4.dot_i16x8_s`) gives `d(c)·Z(c) + d(c+4)·Z(c+4)`, the exact integer
-//! pair sum OpenCV's SSE loop rounds to f32 (§2.4 step 3). Bilinear
+//! pair sum OpenCV's SSE loop rounds to f32 (docs/fidelity.md §VO-2.4 step 3). Bilinear
 //! interpolation is a multiply-add of (I(c), I(c+1)) pairs, shuffled straight
 //! into that order, with (w00, w01) and (w10, w11).
 //!
@@ -101,7 +101,7 @@ impl Acc {
 }
 
 /// OpenCV's tensor lanes L0..L3 of ΣA·B, replayed term by term: columns
-/// 0..15 in column order, column c into lane c mod 4 (§2.4 "Structure tensor").
+/// 0..15 in column order, column c into lane c mod 4 (§VO-2.4 "Structure tensor").
 fn tensor_lanes_replay(a: &Win16, b: &Win16) -> [f32; 4] {
     let mut l = [0f32; 4];
     for (ra, rb) in a.iter().zip(b) {
