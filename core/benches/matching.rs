@@ -24,9 +24,7 @@ fn features(id: u32) -> Features {
 /// Every query feature through `strategy` on this thread only, for the comparison with
 /// OpenCV under `cv2.setNumThreads(1)`.
 fn all_features_one_thread(s: &Strategy, prev: &Features, cur: &Features) -> usize {
-    (0..prev.keypoints.len())
-        .map(|i| match_feature(s, prev, cur, i).map(|m| m.len()).unwrap_or(0))
-        .sum()
+    (0..prev.keypoints.len()).map(|i| match_feature(s, prev, cur, i).map(|m| m.len()).unwrap_or(0)).sum()
 }
 
 fn bench_matching(c: &mut Criterion) {

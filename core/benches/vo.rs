@@ -11,9 +11,7 @@ use std::path::Path;
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use siftlab_core::sift::{detect, SiftParams};
 use siftlab_core::vo::lk::calc_optical_flow_pyr_lk_portable;
-use siftlab_core::vo::{
-    calc_optical_flow_pyr_lk, find_essential_mat, recover_pose, Camera, LkParams, RansacParams,
-};
+use siftlab_core::vo::{calc_optical_flow_pyr_lk, find_essential_mat, recover_pose, Camera, LkParams, RansacParams};
 use siftlab_core::GrayImage;
 
 fn load(id: usize) -> GrayImage {
@@ -41,31 +39,18 @@ fn bench_vo(c: &mut Criterion) {
     let cam = Camera::default();
     let ransac = RansacParams::default();
     let ess = find_essential_mat(&cur, &refs, &cam, &ransac).expect("essential matrix");
-    eprintln!(
-        "vo bench: {} points, {} tracked, {} RANSAC iterations",
-        pts.len(),
-        cur.len(),
-        ess.iterations
-    );
+    eprintln!("vo bench: {} points, {} tracked, {} RANSAC iterations", pts.len(), cur.len(), ess.iterations);
 
     let mut g = c.benchmark_group("vo");
     g.sample_size(20);
-    g.bench_function("sift_detect_1241x376", |b| {
-        b.iter(|| detect(black_box(&prev), black_box(&params)))
-    });
-    g.bench_function("lk_1500", |b| {
-        b.iter(|| calc_optical_flow_pyr_lk(black_box(&prev), black_box(&next), &pts, &lk))
-    });
+    g.bench_function("sift_detect_1241x376", |b| b.iter(|| detect(black_box(&prev), black_box(&params))));
+    g.bench_function("lk_1500", |b| b.iter(|| calc_optical_flow_pyr_lk(black_box(&prev), black_box(&next), &pts, &lk)));
     g.bench_function("lk_1500_portable", |b| {
         b.iter(|| calc_optical_flow_pyr_lk_portable(black_box(&prev), black_box(&next), &pts, &lk))
     });
-    g.bench_function("find_essential_mat", |b| {
-        b.iter(|| find_essential_mat(black_box(&cur), &refs, &cam, &ransac))
-    });
+    g.bench_function("find_essential_mat", |b| b.iter(|| find_essential_mat(black_box(&cur), &refs, &cam, &ransac)));
     let e = *ess.essential().expect("E");
-    g.bench_function("recover_pose", |b| {
-        b.iter(|| recover_pose(black_box(&e), &cur, &refs, &cam))
-    });
+    g.bench_function("recover_pose", |b| b.iter(|| recover_pose(black_box(&e), &cur, &refs, &cam)));
     g.finish();
 }
 

@@ -54,11 +54,7 @@ pub fn parse_poses(text: &str) -> Result<Vec<PoseRow>> {
         for (k, f) in fields.iter().enumerate() {
             // Rust's parse is correctly rounded, like Python's float().
             let v: f64 = f.parse().map_err(|_| {
-                Error::Dataset(format!(
-                    "{POSES_FILE} line {}: field {} ({f:?}) is not a number",
-                    n + 1,
-                    k + 1
-                ))
+                Error::Dataset(format!("{POSES_FILE} line {}: field {} ({f:?}) is not a number", n + 1, k + 1))
             })?;
             if !v.is_finite() {
                 return Err(Error::Dataset(format!(
@@ -112,23 +108,15 @@ impl Dataset {
         }
         let frames = root.join(FRAME_DIR);
         if !frames.is_dir() {
-            return Err(Error::Dataset(format!(
-                "{} has no {FRAME_DIR} folder ({layout})",
-                root.display()
-            )));
+            return Err(Error::Dataset(format!("{} has no {FRAME_DIR} folder ({layout})", root.display())));
         }
         let poses_path = root.join(POSES_FILE);
         let text = std::fs::read(&poses_path).map_err(|e| {
-            Error::Dataset(format!(
-                "cannot read the ground-truth poses {}: {e} ({layout})",
-                poses_path.display()
-            ))
+            Error::Dataset(format!("cannot read the ground-truth poses {}: {e} ({layout})", poses_path.display()))
         })?;
-        let text = String::from_utf8(text).map_err(|_| {
-            Error::Dataset(format!("{} is not a text file of numbers", poses_path.display()))
-        })?;
-        let poses = parse_poses(&text)
-            .map_err(|e| Error::Dataset(format!("{}: {e}", root.display())))?;
+        let text = String::from_utf8(text)
+            .map_err(|_| Error::Dataset(format!("{} is not a text file of numbers", poses_path.display())))?;
+        let poses = parse_poses(&text).map_err(|e| Error::Dataset(format!("{}: {e}", root.display())))?;
         let mut frame_count = 0;
         while frames.join(frame_name(frame_count)).is_file() {
             frame_count += 1;
@@ -192,9 +180,8 @@ impl Dataset {
     #[cfg(not(target_arch = "wasm32"))]
     pub fn load_frame(&self, i: usize) -> Result<crate::GrayImage> {
         let path = self.frame_path(i);
-        let bytes = std::fs::read(&path).map_err(|e| {
-            Error::Dataset(format!("cannot read frame {i} ({}): {e}", path.display()))
-        })?;
+        let bytes = std::fs::read(&path)
+            .map_err(|e| Error::Dataset(format!("cannot read frame {i} ({}): {e}", path.display())))?;
         crate::GrayImage::decode(&bytes).map_err(|e| Error::Decode(format!("frame {i} ({}): {e}", path.display())))
     }
 }
@@ -219,10 +206,7 @@ mod tests {
     #[test]
     fn malformed_lines_are_named() {
         let e = parse_poses("1 0 0 0 0 1 0 0 0 0 1 0\n1 2 3\n").unwrap_err();
-        assert_eq!(
-            e.to_string(),
-            "poses/00.txt line 2: expected 12 numbers (a 3x4 [R|t] matrix), found 3"
-        );
+        assert_eq!(e.to_string(), "poses/00.txt line 2: expected 12 numbers (a 3x4 [R|t] matrix), found 3");
         let e = parse_poses("\n1 0 0 0 0 1 0 x 0 0 1 0\n").unwrap_err();
         assert_eq!(e.to_string(), "poses/00.txt line 2: field 8 (\"x\") is not a number");
         let e = parse_poses("1 0 0 0 0 1 0 0 0 0 1 nan\n").unwrap_err();

@@ -102,7 +102,11 @@ fn inflate_and_unfilter(chunks: Chunks, w: usize, h: usize) -> Result<(usize, us
             if used == 0 && made == 0 {
                 // Stuck: the buffer (exactly the image) is full, or the
                 // data stopped mid-stream.
-                let what = if produced == filtered.len() { "its pixel data is longer than the image" } else { "its pixel data ends early" };
+                let what = if produced == filtered.len() {
+                    "its pixel data is longer than the image"
+                } else {
+                    "its pixel data ends early"
+                };
                 return Err(corrupt(what));
             }
         }
@@ -260,7 +264,13 @@ mod tests {
                 for c in 0..=255u8 {
                     let p = a as i16 + b as i16 - c as i16;
                     let (pa, pb, pc) = ((p - a as i16).abs(), (p - b as i16).abs(), (p - c as i16).abs());
-                    let spec = if pa <= pb && pa <= pc { a } else if pb <= pc { b } else { c };
+                    let spec = if pa <= pb && pa <= pc {
+                        a
+                    } else if pb <= pc {
+                        b
+                    } else {
+                        c
+                    };
                     assert_eq!(paeth(a, b, c), spec, "a={a} b={b} c={c}");
                 }
             }
@@ -269,7 +279,14 @@ mod tests {
 
     #[test]
     fn every_filter_and_size_matches_the_image_crate() {
-        let filters = [FilterType::NoFilter, FilterType::Sub, FilterType::Up, FilterType::Avg, FilterType::Paeth, FilterType::Adaptive];
+        let filters = [
+            FilterType::NoFilter,
+            FilterType::Sub,
+            FilterType::Up,
+            FilterType::Avg,
+            FilterType::Paeth,
+            FilterType::Adaptive,
+        ];
         for (w, h) in [(1, 1), (1, 7), (7, 1), (2, 2), (3, 5), (33, 17), (64, 9), (1241, 6)] {
             for (k, &filter) in filters.iter().enumerate() {
                 let px = pattern(w, h, (w * 31 + h * 7 + k) as u32);

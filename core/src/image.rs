@@ -61,9 +61,7 @@ impl GrayImage {
             )
         })?;
         if !matches!(format, image::ImageFormat::Png | image::ImageFormat::Jpeg) {
-            return Err(Error::Decode(format!(
-                "unsupported image format {format:?}: use a PNG or JPEG frame"
-            )));
+            return Err(Error::Decode(format!("unsupported image format {format:?}: use a PNG or JPEG frame")));
         }
         let reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
         let mut decoder = reader;
@@ -72,16 +70,13 @@ impl GrayImage {
         decoder.limits(limits);
         let (w, h) = {
             let r = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
-            r.into_dimensions()
-                .map_err(|e| Error::Decode(format!("cannot read the image header: {e}")))?
+            r.into_dimensions().map_err(|e| Error::Decode(format!("cannot read the image header: {e}")))?
         };
         if w as u64 * h as u64 > MAX_PIXELS {
             return Err(Error::TooLarge { width: w, height: h, limit: MAX_PIXELS });
         }
         let img = decoder.decode().map_err(|e| {
-            Error::Decode(format!(
-                "the image is corrupt or truncated ({e}); re-export or re-download it"
-            ))
+            Error::Decode(format!("the image is corrupt or truncated ({e}); re-export or re-download it"))
         })?;
         // A gray PNG (every KITTI frame) is already the pixels: no copy.
         if let image::DynamicImage::ImageLuma8(g) = img {

@@ -43,11 +43,46 @@ const NO_MATCH: &str = "((0, 0), [], [])";
 
 /// The manual's examples, in its order (Task 1: dt, Task 2: nn, Task 3: nndr).
 pub const EXAMPLES: [ManualExample; 7] = [
-    ManualExample { task: "Task 1 (dt)", algo: "dt", threshold: Some(100.0), frame: 150, feature: 209, expected: ONE_MATCH_209 },
-    ManualExample { task: "Task 1 (dt)", algo: "dt", threshold: Some(300.0), frame: 150, feature: 209, expected: DT_300 },
-    ManualExample { task: "Task 2 (nn)", algo: "nn", threshold: None, frame: 150, feature: 209, expected: ONE_MATCH_209 },
-    ManualExample { task: "Task 2 (nn)", algo: "nn", threshold: Some(100.0), frame: 150, feature: 209, expected: ONE_MATCH_209 },
-    ManualExample { task: "Task 2 (nn)", algo: "nn", threshold: Some(50.0), frame: 150, feature: 209, expected: NO_MATCH },
+    ManualExample {
+        task: "Task 1 (dt)",
+        algo: "dt",
+        threshold: Some(100.0),
+        frame: 150,
+        feature: 209,
+        expected: ONE_MATCH_209,
+    },
+    ManualExample {
+        task: "Task 1 (dt)",
+        algo: "dt",
+        threshold: Some(300.0),
+        frame: 150,
+        feature: 209,
+        expected: DT_300,
+    },
+    ManualExample {
+        task: "Task 2 (nn)",
+        algo: "nn",
+        threshold: None,
+        frame: 150,
+        feature: 209,
+        expected: ONE_MATCH_209,
+    },
+    ManualExample {
+        task: "Task 2 (nn)",
+        algo: "nn",
+        threshold: Some(100.0),
+        frame: 150,
+        feature: 209,
+        expected: ONE_MATCH_209,
+    },
+    ManualExample {
+        task: "Task 2 (nn)",
+        algo: "nn",
+        threshold: Some(50.0),
+        frame: 150,
+        feature: 209,
+        expected: NO_MATCH,
+    },
     ManualExample {
         task: "Task 3 (nndr)",
         algo: "nndr",
@@ -56,7 +91,14 @@ pub const EXAMPLES: [ManualExample; 7] = [
         feature: 45,
         expected: "((22, 14), [(61, 163)], [156.46725463867188])",
     },
-    ManualExample { task: "Task 3 (nndr)", algo: "nndr", threshold: Some(0.93), frame: 120, feature: 45, expected: NO_MATCH },
+    ManualExample {
+        task: "Task 3 (nndr)",
+        algo: "nndr",
+        threshold: Some(0.93),
+        frame: 120,
+        feature: 45,
+        expected: NO_MATCH,
+    },
 ];
 
 /// The frames the examples need (each example matches `frame - 1` into `frame`).

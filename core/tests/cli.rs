@@ -189,7 +189,8 @@ fn sift_json_round_trips_opencv_values_bit_exactly() {
         let n = golden.keypoints.len();
         assert_eq!((kps.len(), descs.len()), (n, n), "{id}: keypoint/descriptor counts");
         for (i, (kp, want)) in kps.iter().zip(&golden.keypoints).enumerate() {
-            let fields = [("x", want.x), ("y", want.y), ("size", want.size), ("angle", want.angle), ("response", want.response)];
+            let fields =
+                [("x", want.x), ("y", want.y), ("size", want.size), ("angle", want.angle), ("response", want.response)];
             for (key, want) in fields {
                 let got = kp.get(key).and_then(|v| v.f32()).unwrap_or_else(|| panic!("kp {i} {key}"));
                 assert_eq!(got.to_bits(), want.to_bits(), "{id} kp {i} {key}: {got:?} vs OpenCV {want:?}");
@@ -470,9 +471,21 @@ fn view_trajectory_counts_frames_as_the_lab_does() {
     let poses = dir.join("p.txt");
     let png = dir.join("t.png");
     let ds = dataset();
-    let o = siftlab(&["-d", ds.to_str().unwrap(), "view_trajectory", "4", "--save-poses", poses.to_str().unwrap(), "--output", png.to_str().unwrap()]);
+    let o = siftlab(&[
+        "-d",
+        ds.to_str().unwrap(),
+        "view_trajectory",
+        "4",
+        "--save-poses",
+        poses.to_str().unwrap(),
+        "--output",
+        png.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let want = format!("vo params: (None, None, '{}')\ndebug run: view_trajectory(4,)\nret value: None\n", ds.to_str().unwrap());
+    let want = format!(
+        "vo params: (None, None, '{}')\ndebug run: view_trajectory(4,)\nret value: None\n",
+        ds.to_str().unwrap()
+    );
     assert_eq!(stdout(&o), want);
     assert_eq!(fs::read_to_string(&poses).unwrap().lines().count(), 5, "frames 0..=4");
     assert!(stderr(&o).contains("trajectory error (ATE RMSE, 5 frames)"), "{}", stderr(&o));
@@ -480,6 +493,10 @@ fn view_trajectory_counts_frames_as_the_lab_does() {
 
     // Beyond the bundled run of frames: which frames exist, and what to ask for.
     let o = siftlab(&["-d", ds.to_str().unwrap(), "view_trajectory", "150", "--output", png.to_str().unwrap()]);
-    assert_fails(&o, &["frames 0 to 150", "frames 0 to 99 only", "000100.png", "FRAME_ID 99 or less"], "view_trajectory 150");
+    assert_fails(
+        &o,
+        &["frames 0 to 150", "frames 0 to 99 only", "000100.png", "FRAME_ID 99 or less"],
+        "view_trajectory 150",
+    );
     let _ = fs::remove_dir_all(&dir);
 }

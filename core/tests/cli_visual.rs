@@ -126,6 +126,9 @@ fn visual_commands_check_arguments_like_get_info() {
         assert!(!o.status.success(), "{args:?} should fail");
         assert_ne!(o.status.code(), Some(101), "{args:?} panicked: {err}");
         assert!(err.contains("siftlab: error:"), "{args:?}: {err}");
-        assert!(!dir.join("opencv_visual.png").exists() && !dir.join("custom_visual.png").exists(), "{args:?} wrote a PNG");
+        assert!(
+            !dir.join("opencv_visual.png").exists() && !dir.join("custom_visual.png").exists(),
+            "{args:?} wrote a PNG"
+        );
     }
 }

@@ -40,8 +40,7 @@ fn ours(set: &GoldenSet, id: &str) -> Arc<Features> {
     let slot = CACHE.get_or_init(Default::default).lock().unwrap().entry(key).or_default().clone();
     slot.get_or_init(|| {
         let fpath = set.frame_path(id);
-        let img = GrayImage::decode(&fs::read(&fpath).unwrap())
-            .unwrap_or_else(|e| panic!("{}: {e}", fpath.display()));
+        let img = GrayImage::decode(&fs::read(&fpath).unwrap()).unwrap_or_else(|e| panic!("{}: {e}", fpath.display()));
         Arc::new(detect_and_compute(&img, &set.params()))
     })
     .clone()
@@ -67,7 +66,12 @@ fn sift_is_bit_exact_against_opencv_without_ipp() {
     let mut failures = Vec::new();
     for set in golden_sets() {
         let (total, report) = noipp_differences(&set);
-        eprintln!("{} noipp ({} lanes): {total} keypoints; {} keypoints or descriptors differ", set.name, set.lanes, report.len());
+        eprintln!(
+            "{} noipp ({} lanes): {total} keypoints; {} keypoints or descriptors differ",
+            set.name,
+            set.lanes,
+            report.len()
+        );
         assert!(total > 0, "{}: no keypoints", set.name);
         failures.extend(report.into_iter().map(|r| format!("{} ({} lanes) {r}", set.name, set.lanes)));
     }
@@ -121,7 +125,9 @@ fn noipp_differences(set: &GoldenSet) -> (usize, Vec<String>) {
 /// where the whole pyramid is built first.
 #[test]
 fn detect_alone_is_bit_exact_on_one_thread_and_on_all() {
-    let bits = |k: &KeyPoint| (k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits(), k.octave);
+    let bits = |k: &KeyPoint| {
+        (k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits(), k.octave)
+    };
     let mut compared = 0;
     for set in golden_sets() {
         for id in set_frames(&set, "noipp") {
@@ -285,9 +291,18 @@ fn matching_on_opencvs_features_equals_the_labs_python() {
             Arc::new(Features { keypoints: g.keypoints, descriptors: g.descriptors })
         };
         let (n, failures) = run_draws(&set, opencv);
-        eprintln!("{}: get_info on OpenCV's features: {}/{n} identical to the lab's Python", set.name, n - failures.len());
+        eprintln!(
+            "{}: get_info on OpenCV's features: {}/{n} identical to the lab's Python",
+            set.name,
+            n - failures.len()
+        );
         assert!(n >= 200, "{}: only {n} get_info goldens", set.name);
-        assert!(failures.is_empty(), "{} of {n} differ; first ones:\n{}", failures.len(), failures[..failures.len().min(10)].join("\n"));
+        assert!(
+            failures.is_empty(),
+            "{} of {n} differ; first ones:\n{}",
+            failures.len(),
+            failures[..failures.len().min(10)].join("\n")
+        );
     }
 }
 
@@ -299,7 +314,11 @@ fn matching_on_opencvs_features_equals_the_labs_python() {
 fn get_info_end_to_end_equals_the_labs_python() {
     for set in golden_sets() {
         let (n, failures) = run_draws(&set, |frame| ours(&set, &format!("{frame:06}")));
-        eprintln!("{}: get_info end to end: {}/{n} identical to the lab's Python + OpenCV", set.name, n - failures.len());
+        eprintln!(
+            "{}: get_info end to end: {}/{n} identical to the lab's Python + OpenCV",
+            set.name,
+            n - failures.len()
+        );
         for f in &failures {
             eprintln!("  {f}");
         }
@@ -321,7 +340,11 @@ fn each_golden_set_needs_its_own_simd_width() {
     for set in golden_sets() {
         let other = if set.lanes == 8 { 16 } else { 8 };
         let (total, report) = noipp_differences(&GoldenSet { lanes: other, ..set });
-        eprintln!("{} noipp at the other width ({other} lanes): {} of {total} keypoints or descriptors differ", set.name, report.len());
+        eprintln!(
+            "{} noipp at the other width ({other} lanes): {} of {total} keypoints or descriptors differ",
+            set.name,
+            report.len()
+        );
         assert!(!report.is_empty(), "{}: {other} lanes gave the {}-lane goldens too", set.name, set.lanes);
     }
 }

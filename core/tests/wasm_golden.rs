@@ -76,7 +76,13 @@ fn compare(name: &str, ours: &Features, golden: &[u8]) -> (usize, usize, usize) 
     let base = 20 + 24 * n;
     for (i, k) in ours.keypoints.iter().enumerate() {
         let o = 20 + 24 * i;
-        let want = [u32_at(golden, o), u32_at(golden, o + 4), u32_at(golden, o + 8), u32_at(golden, o + 12), u32_at(golden, o + 16)];
+        let want = [
+            u32_at(golden, o),
+            u32_at(golden, o + 4),
+            u32_at(golden, o + 8),
+            u32_at(golden, o + 12),
+            u32_at(golden, o + 16),
+        ];
         let got = [k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits()];
         if got == want && k.octave == u32_at(golden, o + 20) as i32 {
             kp_ok += 1;
@@ -164,13 +170,19 @@ fn golden_features(golden: &[u8]) -> Features {
     let keypoints = (0..n)
         .map(|i| {
             let o = 20 + 24 * i;
-            KeyPoint { x: f(o), y: f(o + 4), size: f(o + 8), angle: f(o + 12), response: f(o + 16), octave: u32_at(golden, o + 20) as i32 }
+            KeyPoint {
+                x: f(o),
+                y: f(o + 4),
+                size: f(o + 8),
+                angle: f(o + 12),
+                response: f(o + 16),
+                octave: u32_at(golden, o + 20) as i32,
+            }
         })
         .collect();
     let base = 20 + 24 * n;
-    let descriptors = (0..n)
-        .map(|i| <[u8; 128]>::try_from(&golden[base + 128 * i..base + 128 * (i + 1)]).unwrap())
-        .collect();
+    let descriptors =
+        (0..n).map(|i| <[u8; 128]>::try_from(&golden[base + 128 * i..base + 128 * (i + 1)]).unwrap()).collect();
     Features { keypoints, descriptors }
 }
 
@@ -192,7 +204,8 @@ fn matching_in_the_browser_equals_the_lab() {
             .iter()
             .enumerate()
             .map(|(t, d)| {
-                let s: u32 = prev.descriptors[q].iter().zip(d).map(|(&a, &b)| (a as i32 - b as i32).pow(2) as u32).sum();
+                let s: u32 =
+                    prev.descriptors[q].iter().zip(d).map(|(&a, &b)| (a as i32 - b as i32).pow(2) as u32).sum();
                 (s, t)
             })
             .collect();
@@ -215,17 +228,18 @@ fn matching_in_the_browser_equals_the_lab() {
         let threshold = rec.get("threshold").and_then(|v| v.f64());
         let feature = rec.get("feature").and_then(|v| v.i64()).expect("feature") as usize;
         let stdout = rec.get("stdout").and_then(|v| v.str()).expect("stdout");
-        let want = stdout
-            .lines()
-            .find_map(|l| l.strip_prefix("ret value: "))
-            .expect("golden has a ret value line");
+        let want = stdout.lines().find_map(|l| l.strip_prefix("ret value: ")).expect("golden has a ret value line");
         let s = Strategy::parse(algo, threshold).expect("golden strategy is valid");
         let m = match_feature(&s, &prev, &cur, feature).expect("golden feature is in range");
         let got = matching_info(&prev.keypoints, &cur.keypoints, &m).to_string();
         if got != want {
             let at = want.bytes().zip(got.bytes()).position(|(a, b)| a != b).unwrap_or(want.len().min(got.len()));
             let clip = |t: &str| t.get(at.saturating_sub(40)..(at + 40).min(t.len())).unwrap_or("").to_owned();
-            failures.push(format!("get_info -a {algo} -t {threshold:?} 1 {feature}: opencv ...{}... ours ...{}...", clip(want), clip(&got)));
+            failures.push(format!(
+                "get_info -a {algo} -t {threshold:?} 1 {feature}: opencv ...{}... ours ...{}...",
+                clip(want),
+                clip(&got)
+            ));
         }
         checked += 1;
     }
@@ -244,9 +258,9 @@ const FMA_SPECIAL: [(f32, f32, f32); 6] = [
     (1.0 + f32::EPSILON, 1.0 + f32::EPSILON, -1.0), // exact result 2^-22 + 2^-46: halfway in f64
     (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, 0.0),  // 1 + 2^-11 + 2^-24: an f32 halfway point
     (1.0 + 1.0 / 4096.0, 1.0 + 1.0 / 4096.0, -(1.0 + 1.0 / 2048.0)), // 2^-24 fused, 0 unfused
-    (3.0, 5.0, -15.0),                               // exact zero
-    (1e-20, 1e-20, 0.0),                             // f32-subnormal product
-    (1e-20, -1e-20, 1e-39),                          // subnormal sum
+    (3.0, 5.0, -15.0),                              // exact zero
+    (1e-20, 1e-20, 0.0),                            // f32-subnormal product
+    (1e-20, -1e-20, 1e-39),                         // subnormal sum
 ];
 
 /// Random f32s: `random(lo)` takes the sign and mantissa bits of an xorshift draw
@@ -283,16 +297,32 @@ fn simd_fma_emulation_equals_the_scalar_one() {
                 let w = random(0x3F00_0000);
                 (
                     [random(0x3F00_0000), random(0x4000_0000), random(0x3E00_0000), random(0x4300_0000)],
-                    if round % 2 == 0 { [w; 4] } else { [w, random(0x3E00_0000), random(0x4000_0000), random(0x3F00_0000)] },
+                    if round % 2 == 0 {
+                        [w; 4]
+                    } else {
+                        [w, random(0x3E00_0000), random(0x4000_0000), random(0x3F00_0000)]
+                    },
                     [random(0x3300_0000), random(0x4300_0000), random(0x3F00_0000), -random(0x4000_0000)],
                 )
             }
         };
         let v = |x: [f32; 4]| f32x4(x[0], x[1], x[2], x[3]);
         let got = fma_emulated_x4(v(a), v(b), v(c));
-        let got = [f32x4_extract_lane::<0>(got), f32x4_extract_lane::<1>(got), f32x4_extract_lane::<2>(got), f32x4_extract_lane::<3>(got)];
+        let got = [
+            f32x4_extract_lane::<0>(got),
+            f32x4_extract_lane::<1>(got),
+            f32x4_extract_lane::<2>(got),
+            f32x4_extract_lane::<3>(got),
+        ];
         for l in 0..4 {
-            assert_eq!(got[l].to_bits(), fma_emulated(a[l], b[l], c[l]).to_bits(), "lane {l}: {} * {} + {}", a[l], b[l], c[l]);
+            assert_eq!(
+                got[l].to_bits(),
+                fma_emulated(a[l], b[l], c[l]).to_bits(),
+                "lane {l}: {} * {} + {}",
+                a[l],
+                b[l],
+                c[l]
+            );
             checked += 1;
         }
     }
@@ -321,7 +351,9 @@ fn gradient_kernels_equal_the_scalar_ones() {
         dxs.push(random(0x3F00_0000) * 2f32.powi((random(0x3F80_0000) * 8.0) as i32));
         dys.push(random(0x3F00_0000) * 2f32.powi((random(0x3F80_0000) * 8.0) as i32));
     }
-    let args: Vec<f32> = (0..dxs.len()).map(|i| if i % 97 == 0 { -3000.0 + i as f32 * 1e-3 } else { -random(0x3F80_0000).abs() * 40.0 }).collect();
+    let args: Vec<f32> = (0..dxs.len())
+        .map(|i| if i % 97 == 0 { -3000.0 + i as f32 * 1e-3 } else { -random(0x3F80_0000).abs() * 40.0 })
+        .collect();
     let (oris, mags) = gradient_directions(&dxs, &dys);
     let (oris2, mags2, wts) = gradient_samples(&dxs, &dys, &args);
     for i in 0..dxs.len() {
@@ -420,8 +452,10 @@ fn lk_in_the_browser_is_bit_exact() {
         GrayImage::new(w, h, data).unwrap()
     };
     let (a, b) = (noisy(0.0), noisy(1.3));
-    let grid: Vec<[f32; 2]> = (0..400).map(|k| [-5.0 + (k % 25) as f32 * 13.7, -5.0 + (k / 25) as f32 * 13.3]).collect();
-    let (simd, portable) = (calc_optical_flow_pyr_lk(&a, &b, &grid, &lk), calc_optical_flow_pyr_lk_portable(&a, &b, &grid, &lk));
+    let grid: Vec<[f32; 2]> =
+        (0..400).map(|k| [-5.0 + (k % 25) as f32 * 13.7, -5.0 + (k / 25) as f32 * 13.3]).collect();
+    let (simd, portable) =
+        (calc_optical_flow_pyr_lk(&a, &b, &grid, &lk), calc_optical_flow_pyr_lk_portable(&a, &b, &grid, &lk));
     assert_eq!(simd, portable);
     console_log!(
         "wasm LK: 68/68 OpenCV golden points bit-exact; {tracked}/{} fixture keypoints tracked, simd128 = portable \

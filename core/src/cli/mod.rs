@@ -98,7 +98,10 @@ pub fn main() -> i32 {
         match v.to_str().and_then(crate::simd::SimdLevel::parse) {
             Some(level) => crate::simd::set_cap(level),
             None => {
-                eprintln!("siftlab: error: SIFTLAB_SIMD={} is not a SIMD level: use scalar, avx2 or avx512 (or unset it)", v.to_string_lossy());
+                eprintln!(
+                    "siftlab: error: SIFTLAB_SIMD={} is not a SIMD level: use scalar, avx2 or avx512 (or unset it)",
+                    v.to_string_lossy()
+                );
                 return 2;
             }
         }
@@ -189,9 +192,8 @@ pub struct MatchContext {
 }
 
 fn parse_index(s: &str, what: &str) -> Result<usize> {
-    let v: i64 = s.trim().parse().map_err(|_| {
-        Error::InvalidArgument(format!("{what} must be a whole number, got '{s}'"))
-    })?;
+    let v: i64 =
+        s.trim().parse().map_err(|_| Error::InvalidArgument(format!("{what} must be a whole number, got '{s}'")))?;
     if v < 0 {
         return Err(Error::InvalidArgument(format!("{what} must be >= 0, got {v}")));
     }
@@ -201,9 +203,11 @@ fn parse_index(s: &str, what: &str) -> Result<usize> {
 fn parse_threshold(s: &Option<String>) -> Result<Option<f64>> {
     match s {
         None => Ok(None),
-        Some(s) => s.trim().parse::<f64>().map(Some).map_err(|_| {
-            Error::InvalidArgument(format!("threshold must be a number, got '{s}'"))
-        }),
+        Some(s) => s
+            .trim()
+            .parse::<f64>()
+            .map(Some)
+            .map_err(|_| Error::InvalidArgument(format!("threshold must be a number, got '{s}'"))),
     }
 }
 
@@ -247,9 +251,7 @@ fn run_match(cli: &Cli, a: &MatchArgs, name: &str) -> Result<(MatchInfo, MatchCo
     let strategy = Strategy::parse(&a.algo, threshold)?;
     let frame = parse_index(&a.frame_id, "FRAME_ID")?;
     if frame < 1 {
-        return Err(Error::InvalidArgument(
-            "FRAME_ID must be >= 1: frames FRAME_ID-1 and FRAME_ID are matched".into(),
-        ));
+        return Err(Error::InvalidArgument("FRAME_ID must be >= 1: frames FRAME_ID-1 and FRAME_ID are matched".into()));
     }
     let feature = parse_index(&a.feature_id, "FEATURE_ID")?;
     let t_repr = threshold.map_or("None".to_string(), py_float);
@@ -279,9 +281,8 @@ fn run_match(cli: &Cli, a: &MatchArgs, name: &str) -> Result<(MatchInfo, MatchCo
 }
 
 fn run_sift(cli: &Cli, a: &SiftArgs) -> Result<()> {
-    let bytes = std::fs::read(&a.image).map_err(|e| {
-        Error::Dataset(format!("cannot read {}: {e}", a.image.display()))
-    })?;
+    let bytes =
+        std::fs::read(&a.image).map_err(|e| Error::Dataset(format!("cannot read {}: {e}", a.image.display())))?;
     let img = GrayImage::decode(&bytes)?;
     let params = sift_params(cli);
     let mut times = Vec::with_capacity(a.repeat as usize);
@@ -299,7 +300,12 @@ fn run_sift(cli: &Cli, a: &SiftArgs) -> Result<()> {
         let _ = writeln!(out, "{} keypoints in {best:.1} ms", f.keypoints.len());
     } else {
         let mean = times.iter().sum::<f64>() / times.len() as f64;
-        let _ = writeln!(out, "{} keypoints in {best:.1} ms (best of {}; mean {mean:.1} ms)", f.keypoints.len(), times.len());
+        let _ = writeln!(
+            out,
+            "{} keypoints in {best:.1} ms (best of {}; mean {mean:.1} ms)",
+            f.keypoints.len(),
+            times.len()
+        );
     }
     let _ = out.flush();
     Ok(())

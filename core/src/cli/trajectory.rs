@@ -25,9 +25,7 @@ pub fn view_trajectory(
     let ds = Dataset::open(dataset)?;
     let n = frames.unwrap_or(ds.frame_count().min(ds.poses().len()));
     if n == 0 {
-        return Err(Error::InvalidArgument(
-            "the trajectory needs at least one frame (frame 0)".into(),
-        ));
+        return Err(Error::InvalidArgument("the trajectory needs at least one frame (frame 0)".into()));
     }
     ds.check_frames(n)?;
     let mut odo = Odometry::new(Camera::default())?;
@@ -67,8 +65,7 @@ pub fn view_trajectory(
 fn write_png(out: &Path, est: &[[f64; 3]], gt: &[[f64; 3]]) -> Result<()> {
     let img = crate::render::trajectory::draw(gt, est, &crate::render::trajectory::Style::default());
     let png = crate::render::encode_png(&img)?;
-    std::fs::write(out, png)
-        .map_err(|e| Error::Dataset(format!("cannot write {}: {e}", out.display())))
+    std::fs::write(out, png).map_err(|e| Error::Dataset(format!("cannot write {}: {e}", out.display())))
 }
 
 #[cfg(test)]
@@ -107,7 +104,10 @@ mod tests {
         for k in 0..3 {
             assert!((got[k] - want[k]).abs() < 1e-6, "frame 2 position {got:?} vs OpenCV {want:?}");
         }
-        assert!(text.starts_with("final position: x=-0.0325 y=-0.0230 z=1.8588 (ground truth -0.0937 -0.0568 1.7163)"), "{text}");
+        assert!(
+            text.starts_with("final position: x=-0.0325 y=-0.0230 z=1.8588 (ground truth -0.0937 -0.0568 1.7163)"),
+            "{text}"
+        );
         assert!(text.contains("trajectory error (ATE RMSE, 3 frames): "), "{text}");
 
         let img = image::open(&png).unwrap().to_rgb8();
@@ -132,9 +132,7 @@ mod tests {
         assert!(e.contains("at least one frame"), "{e}");
         let e = view_trajectory(&fixture(), Some(101), None, &png, &mut nop).unwrap_err().to_string();
         assert!(e.contains("frames 0 to 100 are needed but") && e.contains("has frames 0 to 99 only"), "{e}");
-        let e = view_trajectory(Path::new("/nonexistent/MyKITTI"), None, None, &png, &mut nop)
-            .unwrap_err()
-            .to_string();
+        let e = view_trajectory(Path::new("/nonexistent/MyKITTI"), None, None, &png, &mut nop).unwrap_err().to_string();
         assert!(e.contains("dataset folder /nonexistent/MyKITTI does not exist"), "{e}");
         assert!(!png.exists());
     }

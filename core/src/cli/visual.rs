@@ -22,7 +22,8 @@ fn write_png(img: &RgbImage, out: &Path) -> Result<()> {
 
 /// `cv2.drawMatchesKnn(prev, prev_kp, cur, cur_kp, matches[feature:feature+1], None, flags=2)`.
 pub fn view_feature(ctx: &MatchContext, _info: &MatchInfo, out: &Path) -> Result<()> {
-    let img = matches::draw_feature(&ctx.prev_image, &ctx.prev.keypoints, &ctx.cur_image, &ctx.cur.keypoints, &ctx.matches)?;
+    let img =
+        matches::draw_feature(&ctx.prev_image, &ctx.prev.keypoints, &ctx.cur_image, &ctx.cur.keypoints, &ctx.matches)?;
     write_png(&img, out)
 }
 

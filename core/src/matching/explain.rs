@@ -76,13 +76,9 @@ pub fn explain(s: &Strategy, prev: &Features, cur: &Features, feature: usize) ->
     let verdict = match *s {
         Strategy::Dt(t) => Verdict::Dt { t, passed: matches.len() },
         Strategy::Nn(t) => Verdict::Nn { t, d1: d(0), kept: !matches.is_empty() },
-        Strategy::Nndr(t) => Verdict::Nndr {
-            t,
-            d1: d(0),
-            d2: d(1),
-            ratio: d(0) as f64 / d(1) as f64,
-            kept: !matches.is_empty(),
-        },
+        Strategy::Nndr(t) => {
+            Verdict::Nndr { t, d1: d(0), d2: d(1), ratio: d(0) as f64 / d(1) as f64, kept: !matches.is_empty() }
+        }
     };
     let info = matching_info(&prev.keypoints, &cur.keypoints, &matches);
     Ok(Explanation { strategy: *s, feature, query: prev.keypoints[feature], ranked, matches, verdict, info })
@@ -106,18 +102,31 @@ pub enum Mistake {
 impl Mistake {
     pub fn describe(&self) -> &'static str {
         match self {
-            Mistake::LessOrEqual => "you used <= where the lab uses a strict < (a distance equal to the threshold must be rejected)",
-            Mistake::TruncatedK100 => "your dt asked knnMatch for k=100 neighbours, so it stops at 100 matches; use k=len(des2)",
-            Mistake::RatioInverted => "your nndr ratio is inverted: keep the nearest m when m.distance < t * n.distance",
+            Mistake::LessOrEqual => {
+                "you used <= where the lab uses a strict < (a distance equal to the threshold must be rejected)"
+            }
+            Mistake::TruncatedK100 => {
+                "your dt asked knnMatch for k=100 neighbours, so it stops at 100 matches; use k=len(des2)"
+            }
+            Mistake::RatioInverted => {
+                "your nndr ratio is inverted: keep the nearest m when m.distance < t * n.distance"
+            }
             Mistake::NnMoreThanOne => "your nn returns more than one match: keep only the nearest neighbour (k=1)",
-            Mistake::WrongFrameOrder => "the frames are swapped: the previous frame (FRAME_ID-1) is the query, the current frame the train",
+            Mistake::WrongFrameOrder => {
+                "the frames are swapped: the previous frame (FRAME_ID-1) is the query, the current frame the train"
+            }
         }
     }
 }
 
 /// The `matching_info` each common mistake would give, where it differs
 /// from the correct one (so a student's answer can be diagnosed).
-pub fn mistaken_answers(s: &Strategy, prev: &Features, cur: &Features, feature: usize) -> Result<Vec<(Mistake, MatchInfo)>> {
+pub fn mistaken_answers(
+    s: &Strategy,
+    prev: &Features,
+    cur: &Features,
+    feature: usize,
+) -> Result<Vec<(Mistake, MatchInfo)>> {
     let e = explain(s, prev, cur, feature)?;
     let info = |m: &[DMatch]| matching_info(&prev.keypoints, &cur.keypoints, m);
     let mut out = Vec::new();
@@ -138,7 +147,8 @@ pub fn mistaken_answers(s: &Strategy, prev: &Features, cur: &Features, feature: 
                 let le: Vec<DMatch> = e.ranked.iter().copied().take(1).filter(|m| m.distance as f64 <= t).collect();
                 push(Mistake::LessOrEqual, info(&le));
             }
-            let two: Vec<DMatch> = e.ranked.iter().copied().take(2).filter(|m| t.is_none_or(|t| (m.distance as f64) < t)).collect();
+            let two: Vec<DMatch> =
+                e.ranked.iter().copied().take(2).filter(|m| t.is_none_or(|t| (m.distance as f64) < t)).collect();
             push(Mistake::NnMoreThanOne, info(&two));
         }
         Strategy::Nndr(t) => {

@@ -137,7 +137,8 @@ mod tests {
                     })
                     .collect();
                 for k in 1..=3 {
-                    let got: Vec<(usize, f32)> = knn_row(3, &row, k).iter().map(|m| (m.train_idx, m.distance)).collect();
+                    let got: Vec<(usize, f32)> =
+                        knn_row(3, &row, k).iter().map(|m| (m.train_idx, m.distance)).collect();
                     assert_eq!(got, knn_row_by_insertion(&row, k), "row {row:?} k {k}");
                 }
             }

@@ -50,9 +50,7 @@ impl Strategy {
                     "nndr needs a threshold: add -t, e.g. -t 0.8 (a ratio in [0, 1])".into(),
                 )),
             },
-            other => Err(Error::InvalidArgument(format!(
-                "unknown strategy '{other}': choose dt, nn or nndr"
-            ))),
+            other => Err(Error::InvalidArgument(format!("unknown strategy '{other}': choose dt, nn or nndr"))),
         }
     }
 
@@ -271,7 +269,9 @@ mod tests {
                 ranked.sort_by(|a, b| a.distance.total_cmp(&b.distance));
                 let want: Vec<DMatch> = match s {
                     Strategy::Dt(t) => ranked.into_iter().filter(|m| (m.distance as f64) < t).collect(),
-                    Strategy::Nn(t) => ranked[..1].iter().copied().filter(|m| t.is_none_or(|t| (m.distance as f64) < t)).collect(),
+                    Strategy::Nn(t) => {
+                        ranked[..1].iter().copied().filter(|m| t.is_none_or(|t| (m.distance as f64) < t)).collect()
+                    }
                     Strategy::Nndr(t) => {
                         if (ranked[0].distance as f64) < t * ranked[1].distance as f64 {
                             vec![ranked[0]]

@@ -54,7 +54,9 @@ pub fn circle8(img: &mut RgbImage, center: (i64, i64), radius: i64, c: Rgb<u8>, 
             hline(img, x21, x22, y21, c);
             hline(img, x21, x22, y22, c);
         } else {
-            for (x, y) in [(x11, y11), (x11, y12), (x12, y11), (x12, y12), (x21, y21), (x21, y22), (x22, y21), (x22, y22)] {
+            for (x, y) in
+                [(x11, y11), (x11, y12), (x12, y11), (x12, y12), (x21, y21), (x21, y22), (x22, y21), (x22, y22)]
+            {
                 put(img, x, y, c);
             }
         }
@@ -143,15 +145,14 @@ fn clip_line(width: i64, height: i64, p1: &mut (i64, i64), p2: &mut (i64, i64)) 
 
 /// OpenCV's slope correction for LINE_AA (index: 5 bits of the minor step).
 const SLOPE_CORR: [i64; 32] = [
-    181, 181, 181, 182, 182, 183, 184, 185, 187, 188, 190, 192, 194, 196, 198, 201,
-    203, 206, 209, 211, 214, 218, 221, 224, 227, 231, 235, 238, 242, 246, 250, 254,
+    181, 181, 181, 182, 182, 183, 184, 185, 187, 188, 190, 192, 194, 196, 198, 201, 203, 206, 209, 211, 214, 218, 221,
+    224, 227, 231, 235, 238, 242, 246, 250, 254,
 ];
 
 /// OpenCV's Gaussian filter for LINE_AA coverage by 1/32 pixel distance.
 const FILTER: [i64; 64] = [
-    168, 177, 185, 194, 202, 210, 218, 224, 231, 236, 241, 246, 249, 252, 254, 254,
-    254, 254, 252, 249, 246, 241, 236, 231, 224, 218, 210, 202, 194, 185, 177, 168,
-    158, 149, 140, 131, 122, 114, 105, 97, 89, 82, 75, 68, 62, 56, 50, 45,
+    168, 177, 185, 194, 202, 210, 218, 224, 231, 236, 241, 246, 249, 252, 254, 254, 254, 254, 252, 249, 246, 241, 236,
+    231, 224, 218, 210, 202, 194, 185, 177, 168, 158, 149, 140, 131, 122, 114, 105, 97, 89, 82, 75, 68, 62, 56, 50, 45,
     40, 36, 32, 28, 25, 22, 19, 16, 14, 12, 11, 9, 8, 7, 5, 5,
 ];
 
@@ -432,7 +433,16 @@ fn fill_convex_poly(img: &mut RgbImage, v: &[(i64, i64)], c: Rgb<u8>, aa: bool, 
 /// thickness/2 plus round caps on the ends selected by `flags` (bit 0:
 /// start, bit 1: end).
 #[allow(clippy::too_many_arguments)] // OpenCV's ThickLine signature, kept for traceability
-fn thick_line(img: &mut RgbImage, p0: (i64, i64), p1: (i64, i64), c: Rgb<u8>, thickness: i64, aa: bool, flags: u32, shift: u32) {
+fn thick_line(
+    img: &mut RgbImage,
+    p0: (i64, i64),
+    p1: (i64, i64),
+    c: Rgb<u8>,
+    thickness: i64,
+    aa: bool,
+    flags: u32,
+    shift: u32,
+) {
     let up = XY_SHIFT - shift;
     let mut p0 = (p0.0 << up, p0.1 << up);
     let p1 = (p1.0 << up, p1.1 << up);
@@ -535,7 +545,15 @@ fn poly_line(img: &mut RgbImage, v: &[(i64, i64)], closed: bool, c: Rgb<u8>, thi
 fn ellipse_ex(img: &mut RgbImage, center: (i64, i64), r: i64, c: Rgb<u8>, thickness: i64, aa: bool) {
     let r = r.abs();
     let d = (r + (XY_ONE >> 1)) >> XY_SHIFT;
-    let delta = if d < 3 { 90 } else if d < 10 { 30 } else if d < 15 { 18 } else { 5 };
+    let delta = if d < 3 {
+        90
+    } else if d < 10 {
+        30
+    } else if d < 15 {
+        18
+    } else {
+        5
+    };
     let (cx, cy) = (center.0 as f64, center.1 as f64);
     let mut v: Vec<(i64, i64)> = Vec::with_capacity(360 / delta as usize + 2);
     let mut prev: Option<(i64, i64)> = None;
@@ -705,5 +723,4 @@ mod tests {
         assert_eq!(img.get_pixel(20, 20).0, [0, 255, 0]);
         assert_ne!(img.get_pixel(20, 30).0, [0, 255, 0]);
     }
-
 }

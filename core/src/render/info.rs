@@ -122,7 +122,8 @@ mod tests {
     #[test]
     fn circles_clip_at_each_frame_and_unequal_heights_pad() {
         let (a, b) = (flat(30, 20, 0), flat(30, 25, 0));
-        let info = MatchInfo { query: (29, 10), points: vec![(0, 0), (-500, 9_000_000_000)], distances: vec![1.0, 2.0] };
+        let info =
+            MatchInfo { query: (29, 10), points: vec![(0, 0), (-500, 9_000_000_000)], distances: vec![1.0, 2.0] };
         let low = info_frames(&a, &b, &info);
         assert_eq!(low.dimensions(), (60, 25));
         // The query circle at x=29 reaches x=39 on the previous frame only:

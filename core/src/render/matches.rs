@@ -109,10 +109,18 @@ pub fn draw_matches_knn(
     image::imageops::replace(&mut out, &super::gray_to_rgb(img2), w1 as i64, 0);
     for m in matches.iter().flatten() {
         let a = kp1.get(m.query_idx).ok_or_else(|| {
-            Error::InvalidArgument(format!("match query index {} but the first image has {} keypoints", m.query_idx, kp1.len()))
+            Error::InvalidArgument(format!(
+                "match query index {} but the first image has {} keypoints",
+                m.query_idx,
+                kp1.len()
+            ))
         })?;
         let b = kp2.get(m.train_idx).ok_or_else(|| {
-            Error::InvalidArgument(format!("match train index {} but the second image has {} keypoints", m.train_idx, kp2.len()))
+            Error::InvalidArgument(format!(
+                "match train index {} but the second image has {} keypoints",
+                m.train_idx,
+                kp2.len()
+            ))
         })?;
         let c = rng.match_color();
         circle_in_region(&mut out, 0, w1, h1, (fixed(a.x), fixed(a.y)), c);

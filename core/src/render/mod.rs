@@ -27,14 +27,8 @@ pub use image::RgbImage;
 pub fn encode_png(img: &RgbImage) -> Result<Vec<u8>> {
     let mut out = Vec::new();
     let enc = image::codecs::png::PngEncoder::new(&mut out);
-    image::ImageEncoder::write_image(
-        enc,
-        img.as_raw(),
-        img.width(),
-        img.height(),
-        image::ExtendedColorType::Rgb8,
-    )
-    .map_err(|e| Error::Decode(format!("cannot encode the PNG: {e}")))?;
+    image::ImageEncoder::write_image(enc, img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)
+        .map_err(|e| Error::Decode(format!("cannot encode the PNG: {e}")))?;
     Ok(out)
 }
 

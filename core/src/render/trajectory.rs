@@ -50,11 +50,7 @@ impl Style {
                 None => true,
             })
         };
-        (1..=50)
-            .rev()
-            .map(|k| Style { scale: k as f64, ..base.clone() })
-            .find(|s| fits(s))
-            .unwrap_or(base)
+        (1..=50).rev().map(|k| Style { scale: k as f64, ..base.clone() }).find(|s| fits(s)).unwrap_or(base)
     }
 
     /// Python's `int(v * scale) + origin`: truncation toward zero. NaN has
@@ -74,7 +70,11 @@ pub fn py_fixed6(v: f64) -> String {
     if v.is_nan() {
         "nan".into()
     } else if v.is_infinite() {
-        if v > 0.0 { "inf".into() } else { "-inf".into() }
+        if v > 0.0 {
+            "inf".into()
+        } else {
+            "-inf".into()
+        }
     } else {
         format!("{v:.6}")
     }
@@ -200,7 +200,9 @@ mod lab_reference {
 
     /// Fixture truth and gen_refs.py traj()'s made-up estimate.
     fn paths() -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
-        let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/synthetic/poses/00.txt")).unwrap();
+        let text =
+            std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/fixtures/synthetic/poses/00.txt"))
+                .unwrap();
         let truth: Vec<[f64; 3]> = text
             .lines()
             .map(|l| {
@@ -216,7 +218,9 @@ mod lab_reference {
     fn window_equals_the_labs_outside_the_caption() {
         let (truth, est) = paths();
         let img = draw(&truth, &est, &Style::default());
-        let want = image::open(concat!(env!("CARGO_MANIFEST_DIR"), "/src/render/testdata/trajectory_lab.png")).unwrap().to_rgb8();
+        let want = image::open(concat!(env!("CARGO_MANIFEST_DIR"), "/src/render/testdata/trajectory_lab.png"))
+            .unwrap()
+            .to_rgb8();
         assert_eq!(img.dimensions(), want.dimensions());
         let mut dots = 0;
         for (x, y, p) in img.enumerate_pixels() {
@@ -228,7 +232,8 @@ mod lab_reference {
         }
         assert!(dots > 300, "{dots} coloured pixels: both paths drawn");
         // The caption: same band, same text width class, white pixels only inside it.
-        let white = |im: &RgbImage| im.enumerate_pixels().filter(|(_, y, p)| (20..=60).contains(y) && p.0 == [255; 3]).count();
+        let white =
+            |im: &RgbImage| im.enumerate_pixels().filter(|(_, y, p)| (20..=60).contains(y) && p.0 == [255; 3]).count();
         assert!(white(&img) > 150 && white(&want) > 150);
     }
 

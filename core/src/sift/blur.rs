@@ -246,7 +246,12 @@ fn row_block<const B: usize>(src: &[f32], kx: &[f32], dst: &mut [f32], fma: &imp
 }
 
 #[inline(always)]
-fn accumulate_row_generic<const B: usize>(padded: &[f32], kx: &[f32], dst: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
+fn accumulate_row_generic<const B: usize>(
+    padded: &[f32],
+    kx: &[f32],
+    dst: &mut [f32],
+    fma: impl Fn(f32, f32, f32) -> f32,
+) {
     let w = dst.len();
     let (starts, mut x) = blocks(w, B);
     for x in starts {
@@ -369,7 +374,13 @@ fn column_pair_block<const B: usize>(
 const PAIR_BLOCK: usize = 16;
 
 #[inline(always)]
-fn accumulate_column_pair_generic(rows: &[&[f32]], ky: &[f32], d0: &mut [f32], d1: &mut [f32], fma: impl Fn(f32, f32, f32) -> f32) {
+fn accumulate_column_pair_generic(
+    rows: &[&[f32]],
+    ky: &[f32],
+    d0: &mut [f32],
+    d1: &mut [f32],
+    fma: impl Fn(f32, f32, f32) -> f32,
+) {
     let w = d0.len();
     let (starts, mut x) = blocks(w, PAIR_BLOCK);
     for x in starts {
@@ -532,7 +543,6 @@ pub(crate) mod wasm {
         false
     }
 
-
     // The fast path. `fma_emulated_x4` checks every sum for the two cases
     // where rounding the f64 sum to f32 can differ from a fused multiply-add:
     // a sum on an f32 halfway point, and an f32-subnormal magnitude. On tame
@@ -589,7 +599,10 @@ pub(crate) mod wasm {
     #[inline(always)]
     fn store_block(dst: &mut [f32], x: usize, acc: &[v128; P]) {
         for q in 0..P / 2 {
-            let v = i32x4_shuffle::<0, 1, 4, 5>(f32x4_demote_f64x2_zero(acc[2 * q]), f32x4_demote_f64x2_zero(acc[2 * q + 1]));
+            let v = i32x4_shuffle::<0, 1, 4, 5>(
+                f32x4_demote_f64x2_zero(acc[2 * q]),
+                f32x4_demote_f64x2_zero(acc[2 * q + 1]),
+            );
             store(dst, x + 4 * q, v);
         }
     }
@@ -609,7 +622,8 @@ pub(crate) mod wasm {
             let mut x = 0;
             while x + 2 * P <= w {
                 let k0 = f64x2_splat(kx[0] as f64);
-                let mut acc: [v128; P] = core::array::from_fn(|q| round_to_f32(f64x2_mul(load_f64(&wide, x + 2 * q), k0)));
+                let mut acc: [v128; P] =
+                    core::array::from_fn(|q| round_to_f32(f64x2_mul(load_f64(&wide, x + 2 * q), k0)));
                 let mut hard = i64x2_splat(0);
                 for (k, &kv) in kx.iter().enumerate().skip(1) {
                     let kv = f64x2_splat(kv as f64);
@@ -678,7 +692,13 @@ pub(crate) mod wasm {
         column_scalar(centre, pairs, ky, dst, x..w);
     }
 
-    fn column_scalar(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32], xs: core::ops::Range<usize>) {
+    fn column_scalar(
+        centre: &[f32],
+        pairs: &[(&[f32], &[f32])],
+        ky: &[f32],
+        dst: &mut [f32],
+        xs: core::ops::Range<usize>,
+    ) {
         for i in xs {
             let mut a = centre[i] * ky[0];
             for (k, (up, down)) in pairs.iter().enumerate() {
@@ -730,7 +750,13 @@ pub(crate) mod wasm {
 
     #[cfg(feature = "relaxed-simd")]
     #[target_feature(enable = "relaxed-simd")]
-    fn column_fused_block<const B: usize>(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32], x: usize) {
+    fn column_fused_block<const B: usize>(
+        centre: &[f32],
+        pairs: &[(&[f32], &[f32])],
+        ky: &[f32],
+        dst: &mut [f32],
+        x: usize,
+    ) {
         let kc = f32x4_splat(ky[0]);
         let mut acc: [v128; B] = core::array::from_fn(|v| f32x4_mul(load(centre, x + 4 * v), kc));
         for (k, (up, down)) in pairs.iter().enumerate() {
@@ -990,4 +1016,3 @@ mod tests {
         }
     }
 }
-

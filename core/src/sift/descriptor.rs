@@ -261,8 +261,10 @@ mod x86 {
         exp_scale: f32,
     ) {
         let lane = _mm512_setr_ps(0., 1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12., 13., 14., 15.);
-        let (cos_v, sin_v, a_v, b_v) = (_mm512_set1_ps(cos_t), _mm512_set1_ps(sin_t), _mm512_set1_ps(a), _mm512_set1_ps(b));
-        let (half, point5, lo, hi) = (_mm512_set1_ps(D as f32 / 2.0), _mm512_set1_ps(0.5), _mm512_set1_ps(-1.0), _mm512_set1_ps(D as f32));
+        let (cos_v, sin_v, a_v, b_v) =
+            (_mm512_set1_ps(cos_t), _mm512_set1_ps(sin_t), _mm512_set1_ps(a), _mm512_set1_ps(b));
+        let (half, point5, lo, hi) =
+            (_mm512_set1_ps(D as f32 / 2.0), _mm512_set1_ps(0.5), _mm512_set1_ps(-1.0), _mm512_set1_ps(D as f32));
         let mut t = 0;
         while t < n {
             let valid: __mmask16 = if n - t >= 16 { 0xFFFF } else { (1u16 << (n - t)) - 1 };
@@ -286,10 +288,15 @@ mod x86 {
                     _mm512_maskz_loadu_ps(valid, up.as_ptr().add(c)),
                     _mm512_maskz_loadu_ps(valid, down.as_ptr().add(c)),
                 );
-                let w = _mm512_mul_ps(_mm512_fmadd_ps(c_rot, c_rot, _mm512_mul_ps(r_rot, r_rot)), _mm512_set1_ps(exp_scale));
+                let w = _mm512_mul_ps(
+                    _mm512_fmadd_ps(c_rot, c_rot, _mm512_mul_ps(r_rot, r_rot)),
+                    _mm512_set1_ps(exp_scale),
+                );
                 let len = s.dx.len();
                 let k = m.count_ones() as usize;
-                for (v, x) in [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)] {
+                for (v, x) in
+                    [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)]
+                {
                     debug_assert!(v.capacity() >= len + k);
                     _mm512_mask_compressstoreu_ps(v.as_mut_ptr().add(len).cast(), m, x);
                     v.set_len(len + k);
@@ -398,8 +405,10 @@ mod x86 {
     ) -> usize {
         let lane = _mm256_setr_ps(0., 1., 2., 3., 4., 5., 6., 7.);
         let lane_i = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-        let (cos_v, sin_v, a_v, b_v) = (_mm256_set1_ps(cos_t), _mm256_set1_ps(sin_t), _mm256_set1_ps(a), _mm256_set1_ps(b));
-        let (half, point5, lo, hi) = (_mm256_set1_ps(D as f32 / 2.0), _mm256_set1_ps(0.5), _mm256_set1_ps(-1.0), _mm256_set1_ps(D as f32));
+        let (cos_v, sin_v, a_v, b_v) =
+            (_mm256_set1_ps(cos_t), _mm256_set1_ps(sin_t), _mm256_set1_ps(a), _mm256_set1_ps(b));
+        let (half, point5, lo, hi) =
+            (_mm256_set1_ps(D as f32 / 2.0), _mm256_set1_ps(0.5), _mm256_set1_ps(-1.0), _mm256_set1_ps(D as f32));
         let mut t = 0;
         while t + 8 <= n {
             let fj = _mm256_add_ps(_mm256_set1_ps(j0 + t as f32), lane);
@@ -414,14 +423,20 @@ mod x86 {
             let m = _mm256_movemask_ps(keep) as usize;
             if m != 0 {
                 let c = c0 + t;
-                let dx = _mm256_sub_ps(_mm256_loadu_ps(row.as_ptr().add(c + 1)), _mm256_loadu_ps(row.as_ptr().add(c - 1)));
+                let dx =
+                    _mm256_sub_ps(_mm256_loadu_ps(row.as_ptr().add(c + 1)), _mm256_loadu_ps(row.as_ptr().add(c - 1)));
                 let dy = _mm256_sub_ps(_mm256_loadu_ps(up.as_ptr().add(c)), _mm256_loadu_ps(down.as_ptr().add(c)));
-                let w = _mm256_mul_ps(_mm256_fmadd_ps(c_rot, c_rot, _mm256_mul_ps(r_rot, r_rot)), _mm256_set1_ps(exp_scale));
+                let w = _mm256_mul_ps(
+                    _mm256_fmadd_ps(c_rot, c_rot, _mm256_mul_ps(r_rot, r_rot)),
+                    _mm256_set1_ps(exp_scale),
+                );
                 let perm = _mm256_loadu_si256(COMPRESS[m].as_ptr().cast());
                 let k = m.count_ones() as usize;
                 let first_k = _mm256_cmpgt_epi32(_mm256_set1_epi32(k as i32), lane_i);
                 let len = s.dx.len();
-                for (v, x) in [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)] {
+                for (v, x) in
+                    [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)]
+                {
                     debug_assert!(v.capacity() >= len + k);
                     _mm256_maskstore_ps(v.as_mut_ptr().add(len), first_k, _mm256_permutevar8x32_ps(x, perm));
                     v.set_len(len + k);
@@ -548,7 +563,9 @@ mod wasm {
                 // The kept lanes moved to the front, in order, and stored
                 // whole: the lanes past them are overwritten next or cut off.
                 let order = COMPRESS[m];
-                for (v, x) in [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)] {
+                for (v, x) in
+                    [(&mut s.dx, dx), (&mut s.dy, dy), (&mut s.w, w), (&mut s.rbin, rbin), (&mut s.cbin, cbin)]
+                {
                     store(v, len, i8x16_swizzle(x, order));
                 }
                 len += m.count_ones() as usize;
@@ -580,8 +597,8 @@ mod wasm {
                 lane += 1;
             }
             table[m] = u8x16(
-                bytes[0], bytes[1], bytes[2], bytes[3], bytes[4], bytes[5], bytes[6], bytes[7],
-                bytes[8], bytes[9], bytes[10], bytes[11], bytes[12], bytes[13], bytes[14], bytes[15],
+                bytes[0], bytes[1], bytes[2], bytes[3], bytes[4], bytes[5], bytes[6], bytes[7], bytes[8], bytes[9],
+                bytes[10], bytes[11], bytes[12], bytes[13], bytes[14], bytes[15],
             );
             m += 1;
         }
@@ -667,7 +684,11 @@ fn sample_columns(i: i64, radius: i64, cos_t: f32, sin_t: f32) -> Option<(i64, i
             return None;
         }
     }
-    if lo > hi { None } else { Some((lo as i64, hi as i64)) }
+    if lo > hi {
+        None
+    } else {
+        Some((lo as i64, hi as i64))
+    }
 }
 
 /// Clip at 0.2 of the norm, renormalise to 512 and round: OpenCV's
@@ -727,32 +748,28 @@ mod tests {
     /// an FMA in the second norm (as OpenCV's source reads) gives 45 at
     /// element 32; OpenCV gives 46.
     const RAW_BITS: [u32; 128] = [
-        0x421d434a, 0x415e6fff, 0x408b6087, 0x41135d28, 0x423fd148, 0x412cabf8, 0x408a4f5b, 0x3fe6a268,
-        0x43aae13c, 0x422d3bb6, 0x4040d82f, 0x403cae56, 0x40bf16bc, 0x3e95f8c1, 0x411d20b2, 0x4253cc55,
-        0x42404308, 0x40d22a81, 0x41981215, 0x408e1437, 0x3f8db948, 0x3f00bd1e, 0x42c1fef6, 0x42260657,
-        0x3f13766b, 0x403c9de4, 0x423d43c1, 0x3fb60977, 0x3cd7ea17, 0x3fc5b4a1, 0x42d202e3, 0x4111787c,
-        0x42641442, 0x40a0ecf9, 0x3f6f3a53, 0x419c7e4c, 0x42f2b876, 0x40e947c0, 0x3fbe07cf, 0x409f57ff,
-        0x44162dd1, 0x41e1462a, 0x3f2faa3b, 0x403f929b, 0x41c91f7b, 0x40e66ff8, 0x40875dff, 0x4291af3c,
-        0x42a6b3a1, 0x40e5aa27, 0x4226643b, 0x420d05c2, 0x42c37bb0, 0x422c88e8, 0x41467bab, 0x41f00171,
-        0x3e544a99, 0x403ee62f, 0x430f122c, 0x41942156, 0x410666ff, 0x411e1375, 0x41c33d6d, 0x4003cc4f,
-        0x4233a692, 0x3f1a354f, 0x3f180321, 0x414648a6, 0x42772aea, 0x4282735c, 0x4241a578, 0x4148a84b,
-        0x440cfcab, 0x429526c4, 0x40515b66, 0x40534641, 0x41559431, 0x415d15fb, 0x4147ce2b, 0x422f3079,
-        0x42bc1a48, 0x42086495, 0x4163e7e8, 0x425e1469, 0x42d22e32, 0x425efff6, 0x411b4e86, 0x40999712,
-        0x3d98f5c0, 0x3f0232c7, 0x421cbb08, 0x42610b86, 0x41720660, 0x41e12474, 0x422c70d6, 0x3f542926,
-        0x40a84272, 0x3d2cc87c, 0x3f3d6a3a, 0x3fa27342, 0x40c16518, 0x430c9263, 0x43069a9e, 0x414b31f6,
-        0x4348991a, 0x4124bc8a, 0x3f86084d, 0x3f988122, 0x406e8d62, 0x4228e4b0, 0x423ff76c, 0x4308aa07,
-        0x42592e46, 0x40d15669, 0x40cf9f38, 0x421411ef, 0x427fb611, 0x426107c6, 0x40c0221a, 0x41d8a8b6,
-        0x3f0334b5, 0x3f4e458b, 0x41a6b82f, 0x42166a4f, 0x41d0456c, 0x4285dc0d, 0x412058e0, 0x3f81ffee,
+        0x421d434a, 0x415e6fff, 0x408b6087, 0x41135d28, 0x423fd148, 0x412cabf8, 0x408a4f5b, 0x3fe6a268, 0x43aae13c,
+        0x422d3bb6, 0x4040d82f, 0x403cae56, 0x40bf16bc, 0x3e95f8c1, 0x411d20b2, 0x4253cc55, 0x42404308, 0x40d22a81,
+        0x41981215, 0x408e1437, 0x3f8db948, 0x3f00bd1e, 0x42c1fef6, 0x42260657, 0x3f13766b, 0x403c9de4, 0x423d43c1,
+        0x3fb60977, 0x3cd7ea17, 0x3fc5b4a1, 0x42d202e3, 0x4111787c, 0x42641442, 0x40a0ecf9, 0x3f6f3a53, 0x419c7e4c,
+        0x42f2b876, 0x40e947c0, 0x3fbe07cf, 0x409f57ff, 0x44162dd1, 0x41e1462a, 0x3f2faa3b, 0x403f929b, 0x41c91f7b,
+        0x40e66ff8, 0x40875dff, 0x4291af3c, 0x42a6b3a1, 0x40e5aa27, 0x4226643b, 0x420d05c2, 0x42c37bb0, 0x422c88e8,
+        0x41467bab, 0x41f00171, 0x3e544a99, 0x403ee62f, 0x430f122c, 0x41942156, 0x410666ff, 0x411e1375, 0x41c33d6d,
+        0x4003cc4f, 0x4233a692, 0x3f1a354f, 0x3f180321, 0x414648a6, 0x42772aea, 0x4282735c, 0x4241a578, 0x4148a84b,
+        0x440cfcab, 0x429526c4, 0x40515b66, 0x40534641, 0x41559431, 0x415d15fb, 0x4147ce2b, 0x422f3079, 0x42bc1a48,
+        0x42086495, 0x4163e7e8, 0x425e1469, 0x42d22e32, 0x425efff6, 0x411b4e86, 0x40999712, 0x3d98f5c0, 0x3f0232c7,
+        0x421cbb08, 0x42610b86, 0x41720660, 0x41e12474, 0x422c70d6, 0x3f542926, 0x40a84272, 0x3d2cc87c, 0x3f3d6a3a,
+        0x3fa27342, 0x40c16518, 0x430c9263, 0x43069a9e, 0x414b31f6, 0x4348991a, 0x4124bc8a, 0x3f86084d, 0x3f988122,
+        0x406e8d62, 0x4228e4b0, 0x423ff76c, 0x4308aa07, 0x42592e46, 0x40d15669, 0x40cf9f38, 0x421411ef, 0x427fb611,
+        0x426107c6, 0x40c0221a, 0x41d8a8b6, 0x3f0334b5, 0x3f4e458b, 0x41a6b82f, 0x42166a4f, 0x41d0456c, 0x4285dc0d,
+        0x412058e0, 0x3f81ffee,
     ];
     const OPENCV_ROW: [u8; 128] = [
-        31, 11, 3, 7, 38, 9, 3, 1, 166, 35, 2, 2, 5, 0, 8, 42,
-        38, 5, 15, 4, 1, 0, 77, 33, 0, 2, 38, 1, 0, 1, 84, 7,
-        46, 4, 1, 16, 97, 6, 1, 4, 166, 22, 1, 2, 20, 6, 3, 58,
-        67, 6, 33, 28, 78, 34, 10, 24, 0, 2, 114, 15, 7, 8, 19, 2,
-        36, 0, 0, 10, 49, 52, 39, 10, 166, 60, 3, 3, 11, 11, 10, 35,
-        75, 27, 11, 44, 84, 44, 8, 4, 0, 0, 31, 45, 12, 22, 34, 1,
-        4, 0, 1, 1, 5, 112, 107, 10, 160, 8, 1, 1, 3, 34, 38, 109,
-        43, 5, 5, 30, 51, 45, 5, 22, 0, 1, 17, 30, 21, 53, 8, 1,
+        31, 11, 3, 7, 38, 9, 3, 1, 166, 35, 2, 2, 5, 0, 8, 42, 38, 5, 15, 4, 1, 0, 77, 33, 0, 2, 38, 1, 0, 1, 84, 7,
+        46, 4, 1, 16, 97, 6, 1, 4, 166, 22, 1, 2, 20, 6, 3, 58, 67, 6, 33, 28, 78, 34, 10, 24, 0, 2, 114, 15, 7, 8, 19,
+        2, 36, 0, 0, 10, 49, 52, 39, 10, 166, 60, 3, 3, 11, 11, 10, 35, 75, 27, 11, 44, 84, 44, 8, 4, 0, 0, 31, 45, 12,
+        22, 34, 1, 4, 0, 1, 1, 5, 112, 107, 10, 160, 8, 1, 1, 3, 34, 38, 109, 43, 5, 5, 30, 51, 45, 5, 22, 0, 1, 17,
+        30, 21, 53, 8, 1,
     ];
 
     #[test]

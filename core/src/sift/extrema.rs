@@ -71,9 +71,15 @@ pub fn scan_octave(levels: &[Plane], o: usize, rows: std::ops::Range<usize>, p: 
         for layer in 1..=nl {
             let row = |j: usize, y: usize| window.row(slot(j, y));
             let rows = [
-                row(layer - 1, r - 1), row(layer - 1, r), row(layer - 1, r + 1),
-                row(layer, r - 1), row(layer, r), row(layer, r + 1),
-                row(layer + 1, r - 1), row(layer + 1, r), row(layer + 1, r + 1),
+                row(layer - 1, r - 1),
+                row(layer - 1, r),
+                row(layer - 1, r + 1),
+                row(layer, r - 1),
+                row(layer, r),
+                row(layer, r + 1),
+                row(layer + 1, r - 1),
+                row(layer + 1, r),
+                row(layer + 1, r + 1),
             ];
             candidates.clear();
             row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates, &mut scratch);
@@ -101,7 +107,11 @@ pub fn scan_octave(levels: &[Plane], o: usize, rows: std::ops::Range<usize>, p: 
 /// streams run together rather than two at a time.
 fn differences(levels: &[Plane], y: usize, window: &mut Plane) {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx2() && levels.len() == 6 && window.height >= 15 && levels.iter().all(|l| l.width == window.width && y < l.height) {
+    if crate::simd::avx2()
+        && levels.len() == 6
+        && window.height >= 15
+        && levels.iter().all(|l| l.width == window.width && y < l.height)
+    {
         let w = window.width;
         let g: [*const f32; 6] = std::array::from_fn(|k| levels[k].row(y).as_ptr());
         let base = window.data.as_mut_ptr();
@@ -268,9 +278,16 @@ mod x86 {
             let v = _mm512_loadu_ps(p[4].add(x));
             let (pos, neg) = (_mm512_cmp_ps_mask::<_CMP_GT_OQ>(v, hi), _mm512_cmp_ps_mask::<_CMP_LT_OQ>(v, lo));
             if pos | neg != 0 {
-                let mx = _mm512_max_ps(_mm512_max_ps(_mm512_loadu_ps(cmax.add(x - 1)), _mm512_loadu_ps(cmax.add(x))), _mm512_loadu_ps(cmax.add(x + 1)));
-                let mn = _mm512_min_ps(_mm512_min_ps(_mm512_loadu_ps(cmin.add(x - 1)), _mm512_loadu_ps(cmin.add(x))), _mm512_loadu_ps(cmin.add(x + 1)));
-                let hit = (pos & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, mx)) | (neg & _mm512_cmp_ps_mask::<_CMP_LE_OQ>(v, mn));
+                let mx = _mm512_max_ps(
+                    _mm512_max_ps(_mm512_loadu_ps(cmax.add(x - 1)), _mm512_loadu_ps(cmax.add(x))),
+                    _mm512_loadu_ps(cmax.add(x + 1)),
+                );
+                let mn = _mm512_min_ps(
+                    _mm512_min_ps(_mm512_loadu_ps(cmin.add(x - 1)), _mm512_loadu_ps(cmin.add(x))),
+                    _mm512_loadu_ps(cmin.add(x + 1)),
+                );
+                let hit =
+                    (pos & _mm512_cmp_ps_mask::<_CMP_GE_OQ>(v, mx)) | (neg & _mm512_cmp_ps_mask::<_CMP_LE_OQ>(v, mn));
                 let mut mask = hit as u32;
                 while mask != 0 {
                     out.push(x + mask.trailing_zeros() as usize);
@@ -338,8 +355,14 @@ mod x86 {
         while x + 8 <= cols.end {
             let v = _mm256_loadu_ps(p[4].add(x));
             let (pos, neg) = (_mm256_cmp_ps::<_CMP_GT_OQ>(v, hi), _mm256_cmp_ps::<_CMP_LT_OQ>(v, lo));
-            let mx = _mm256_max_ps(_mm256_max_ps(_mm256_loadu_ps(cmax.add(x - 1)), _mm256_loadu_ps(cmax.add(x))), _mm256_loadu_ps(cmax.add(x + 1)));
-            let mn = _mm256_min_ps(_mm256_min_ps(_mm256_loadu_ps(cmin.add(x - 1)), _mm256_loadu_ps(cmin.add(x))), _mm256_loadu_ps(cmin.add(x + 1)));
+            let mx = _mm256_max_ps(
+                _mm256_max_ps(_mm256_loadu_ps(cmax.add(x - 1)), _mm256_loadu_ps(cmax.add(x))),
+                _mm256_loadu_ps(cmax.add(x + 1)),
+            );
+            let mn = _mm256_min_ps(
+                _mm256_min_ps(_mm256_loadu_ps(cmin.add(x - 1)), _mm256_loadu_ps(cmin.add(x))),
+                _mm256_loadu_ps(cmin.add(x + 1)),
+            );
             let hit = _mm256_or_ps(
                 _mm256_and_ps(pos, _mm256_cmp_ps::<_CMP_GE_OQ>(v, mx)),
                 _mm256_and_ps(neg, _mm256_cmp_ps::<_CMP_LE_OQ>(v, mn)),
@@ -429,7 +452,13 @@ struct ColumnExtremes {
     min: Vec<f32>,
 }
 
-fn row_extrema(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize>, out: &mut Vec<usize>, scratch: &mut ColumnExtremes) {
+fn row_extrema(
+    rows: &[&[f32]; 9],
+    thr: f32,
+    cols: std::ops::Range<usize>,
+    out: &mut Vec<usize>,
+    scratch: &mut ColumnExtremes,
+) {
     #[cfg(target_arch = "x86_64")]
     if rows.iter().all(|r| r.len() > cols.end) && cols.start >= 1 {
         // SAFETY (both calls): the CPU supports the features the function was
@@ -486,8 +515,7 @@ fn xy_second_derivs(cur: Dog, r: usize, c: usize) -> (f32, f32, f32) {
     let v2 = cur.at(r, c) * 2.0;
     let dxx = ((cur.at(r, c + 1) + cur.at(r, c - 1)) - v2) * SECOND_DERIV_SCALE;
     let dyy = ((cur.at(r + 1, c) + cur.at(r - 1, c)) - v2) * SECOND_DERIV_SCALE;
-    let dxy = (((cur.at(r + 1, c + 1) - cur.at(r + 1, c - 1)) - cur.at(r - 1, c + 1))
-        + cur.at(r - 1, c - 1))
+    let dxy = (((cur.at(r + 1, c + 1) - cur.at(r + 1, c - 1)) - cur.at(r - 1, c + 1)) + cur.at(r - 1, c - 1))
         * CROSS_DERIV_SCALE;
     (dxx, dyy, dxy)
 }
@@ -498,10 +526,8 @@ fn derivs(cur: Dog, prev: Dog, next: Dog, r: usize, c: usize) -> Derivs {
     let (dxx, dyy, dxy) = xy_second_derivs(cur, r, c);
     let v2 = cur.at(r, c) * 2.0;
     let dss = ((next.at(r, c) + prev.at(r, c)) - v2) * SECOND_DERIV_SCALE;
-    let dxs = (((next.at(r, c + 1) - next.at(r, c - 1)) - prev.at(r, c + 1)) + prev.at(r, c - 1))
-        * CROSS_DERIV_SCALE;
-    let dys = (((next.at(r + 1, c) - next.at(r - 1, c)) - prev.at(r + 1, c)) + prev.at(r - 1, c))
-        * CROSS_DERIV_SCALE;
+    let dxs = (((next.at(r, c + 1) - next.at(r, c - 1)) - prev.at(r, c + 1)) + prev.at(r, c - 1)) * CROSS_DERIV_SCALE;
+    let dys = (((next.at(r + 1, c) - next.at(r - 1, c)) - prev.at(r + 1, c)) + prev.at(r - 1, c)) * CROSS_DERIV_SCALE;
     Derivs { d, dxx, dyy, dss, dxy, dxs, dys }
 }
 
@@ -535,7 +561,14 @@ fn solve_offsets(g: &Derivs) -> (f32, f32, f32) {
 ///
 /// Compiled with FMA where the CPU has it: its two dozen `fma`s and
 /// roundings were calls to `fmaf` and `rintf` otherwise.
-fn adjust_local_extremum(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &SiftParams) -> Option<Refined> {
+fn adjust_local_extremum(
+    levels: &[Plane],
+    o: usize,
+    layer0: usize,
+    r0: usize,
+    c0: usize,
+    p: &SiftParams,
+) -> Option<Refined> {
     crate::with_hw_fma!(Option<Refined>, refine(levels, o, layer0, r0, c0, p))
 }
 
@@ -666,7 +699,8 @@ mod tests {
                 let mut expected = Vec::new();
                 for c in cols.clone() {
                     let v = rows[4][c];
-                    let neighbours = (0..9).flat_map(|i| (0..3).map(move |d| (i, d))).filter(|&(i, d)| (i, d) != (4, 1));
+                    let neighbours =
+                        (0..9).flat_map(|i| (0..3).map(move |d| (i, d))).filter(|&(i, d)| (i, d) != (4, 1));
                     let ok = (v > 1.0 && neighbours.clone().all(|(i, d)| v >= rows[i][c + d - 1]))
                         || (v < -1.0 && neighbours.clone().all(|(i, d)| v <= rows[i][c + d - 1]));
                     if ok {

@@ -56,7 +56,11 @@ impl Rows for Upsampled {
 fn vertical_taps(t: usize, n: usize) -> (usize, usize, f32) {
     let m = t / 2;
     if t % 2 == 0 {
-        if m == 0 { (0, 0, 0.0) } else { (m - 1, m, 0.75) }
+        if m == 0 {
+            (0, 0, 0.0)
+        } else {
+            (m - 1, m, 0.75)
+        }
     } else if m + 1 >= n {
         (n - 1, n - 1, 0.0)
     } else {
@@ -155,13 +159,24 @@ mod tests {
     fn upsample_row_is_inter_linear() {
         let mut s = 0x2545_f491u32;
         for w in 1..=40usize {
-            let src: Vec<u8> = (0..w).map(|_| { s ^= s << 13; s ^= s >> 17; s ^= s << 5; s as u8 }).collect();
+            let src: Vec<u8> = (0..w)
+                .map(|_| {
+                    s ^= s << 13;
+                    s ^= s >> 17;
+                    s ^= s << 5;
+                    s as u8
+                })
+                .collect();
             let mut out = vec![f32::NAN; 2 * w];
             upsample_row(&src, &mut out);
             for (t, &got) in out.iter().enumerate() {
                 let m = t / 2;
                 let (a, b, f) = if t % 2 == 0 {
-                    if m == 0 { (0, 0, 0.0) } else { (m - 1, m, 0.75) }
+                    if m == 0 {
+                        (0, 0, 0.0)
+                    } else {
+                        (m - 1, m, 0.75)
+                    }
                 } else if m + 1 >= w {
                     (w - 1, w - 1, 0.0)
                 } else {

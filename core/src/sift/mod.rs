@@ -42,7 +42,11 @@ impl KeyPoint {
     /// The reported octave (−1 for the doubled base), as `unpackOctave` reads it.
     pub fn octave_index(&self) -> i32 {
         let o = self.octave & 255;
-        if o >= 128 { o - 256 } else { o }
+        if o >= 128 {
+            o - 256
+        } else {
+            o
+        }
     }
 
     /// The DoG layer (1..=3) within the octave.

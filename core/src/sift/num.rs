@@ -82,18 +82,33 @@ pub fn fma_emulated(a: f32, b: f32, c: f32) -> f32 {
 /// the scalar function, so results are identical.
 #[cfg(target_arch = "wasm32")]
 #[inline(always)]
-pub fn fma_emulated_x4(a: core::arch::wasm32::v128, b: core::arch::wasm32::v128, c: core::arch::wasm32::v128) -> core::arch::wasm32::v128 {
+pub fn fma_emulated_x4(
+    a: core::arch::wasm32::v128,
+    b: core::arch::wasm32::v128,
+    c: core::arch::wasm32::v128,
+) -> core::arch::wasm32::v128 {
     use core::arch::wasm32::*;
     let high = |v: v128| i32x4_shuffle::<2, 3, 0, 1>(v, v);
     let lo = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(a), f64x2_promote_low_f32x4(b)), f64x2_promote_low_f32x4(c));
-    let hi = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(high(a)), f64x2_promote_low_f32x4(high(b))), f64x2_promote_low_f32x4(high(c)));
+    let hi = f64x2_add(
+        f64x2_mul(f64x2_promote_low_f32x4(high(a)), f64x2_promote_low_f32x4(high(b))),
+        f64x2_promote_low_f32x4(high(c)),
+    );
     let hard = |s: v128| {
         let midpoint = i64x2_eq(v128_and(s, i64x2_splat(0x1FFF_FFFF)), i64x2_splat(0x1000_0000));
-        let tiny = v128_and(f64x2_lt(f64x2_abs(s), f64x2_splat(f32::MIN_POSITIVE as f64)), f64x2_ne(s, f64x2_splat(0.0)));
+        let tiny =
+            v128_and(f64x2_lt(f64x2_abs(s), f64x2_splat(f32::MIN_POSITIVE as f64)), f64x2_ne(s, f64x2_splat(0.0)));
         v128_or(midpoint, tiny)
     };
     if v128_any_true(v128_or(hard(lo), hard(hi))) {
-        let lanes = |v: v128| [f32x4_extract_lane::<0>(v), f32x4_extract_lane::<1>(v), f32x4_extract_lane::<2>(v), f32x4_extract_lane::<3>(v)];
+        let lanes = |v: v128| {
+            [
+                f32x4_extract_lane::<0>(v),
+                f32x4_extract_lane::<1>(v),
+                f32x4_extract_lane::<2>(v),
+                f32x4_extract_lane::<3>(v),
+            ]
+        };
         let (a, b, c) = (lanes(a), lanes(b), lanes(c));
         return f32x4(
             fma_emulated(a[0], b[0], c[0]),
@@ -154,11 +169,11 @@ fn probe_relaxed_madd() -> bool {
     use core::arch::wasm32::*;
     let a = 1.0 + f32::EPSILON * 2048.0; // 1 + 2^-12
     let c = -(1.0 + f32::EPSILON * 4096.0); // -(1 + 2^-11)
-    // black_box: the answer must come from the engine, not from LLVM folding.
+                                            // black_box: the answer must come from the engine, not from LLVM folding.
     let (a, c) = (core::hint::black_box(f32x4_splat(a)), core::hint::black_box(f32x4_splat(c)));
     let got = f32x4_relaxed_madd(a, a, c);
     let want = f32x4_splat(f32::EPSILON / 2.0); // 2^-24
-    // Bitwise: all four lanes must hold exactly 2^-24.
+                                                // Bitwise: all four lanes must hold exactly 2^-24.
     i32x4_all_true(i32x4_eq(got, want))
 }
 
@@ -222,14 +237,38 @@ pub fn pow2f(y: f32) -> f32 {
 /// Correctly rounded 2^(j/32) with j<<47 subtracted (so the exponent can be
 /// added back as an integer), the table of glibc's exp2f/powf.
 const EXP2F_TAB: [u64; 32] = [
-    0x3ff0000000000000, 0x3fefd9b0d3158574, 0x3fefb5586cf9890f, 0x3fef9301d0125b51,
-    0x3fef72b83c7d517b, 0x3fef54873168b9aa, 0x3fef387a6e756238, 0x3fef1e9df51fdee1,
-    0x3fef06fe0a31b715, 0x3feef1a7373aa9cb, 0x3feedea64c123422, 0x3feece086061892d,
-    0x3feebfdad5362a27, 0x3feeb42b569d4f82, 0x3feeab07dd485429, 0x3feea47eb03a5585,
-    0x3feea09e667f3bcd, 0x3fee9f75e8ec5f74, 0x3feea11473eb0187, 0x3feea589994cce13,
-    0x3feeace5422aa0db, 0x3feeb737b0cdc5e5, 0x3feec49182a3f090, 0x3feed503b23e255d,
-    0x3feee89f995ad3ad, 0x3feeff76f2fb5e47, 0x3fef199bdd85529c, 0x3fef3720dcef9069,
-    0x3fef5818dcfba487, 0x3fef7c97337b9b5f, 0x3fefa4afa2a490da, 0x3fefd0765b6e4540,
+    0x3ff0000000000000,
+    0x3fefd9b0d3158574,
+    0x3fefb5586cf9890f,
+    0x3fef9301d0125b51,
+    0x3fef72b83c7d517b,
+    0x3fef54873168b9aa,
+    0x3fef387a6e756238,
+    0x3fef1e9df51fdee1,
+    0x3fef06fe0a31b715,
+    0x3feef1a7373aa9cb,
+    0x3feedea64c123422,
+    0x3feece086061892d,
+    0x3feebfdad5362a27,
+    0x3feeb42b569d4f82,
+    0x3feeab07dd485429,
+    0x3feea47eb03a5585,
+    0x3feea09e667f3bcd,
+    0x3fee9f75e8ec5f74,
+    0x3feea11473eb0187,
+    0x3feea589994cce13,
+    0x3feeace5422aa0db,
+    0x3feeb737b0cdc5e5,
+    0x3feec49182a3f090,
+    0x3feed503b23e255d,
+    0x3feee89f995ad3ad,
+    0x3feeff76f2fb5e47,
+    0x3fef199bdd85529c,
+    0x3fef3720dcef9069,
+    0x3fef5818dcfba487,
+    0x3fef7c97337b9b5f,
+    0x3fefa4afa2a490da,
+    0x3fefd0765b6e4540,
 ];
 
 /// glibc's `powf(2.0f, y)` for the finite, moderate y SIFT uses.
@@ -548,14 +587,14 @@ pub fn magnitude(x: f32, y: f32) -> f32 {
 }
 
 const EXP_TAB: [u32; 64] = [
-    0x3c1e707a, 0x3c202a27, 0x3c21e8a3, 0x3c23abfb, 0x3c25743e, 0x3c274179, 0x3c2913b9, 0x3c2aeb0d,
-    0x3c2cc783, 0x3c2ea92a, 0x3c30900f, 0x3c327c41, 0x3c346dcf, 0x3c3664c9, 0x3c38613c, 0x3c3a6339,
-    0x3c3c6acf, 0x3c3e780d, 0x3c408b03, 0x3c42a3c1, 0x3c44c258, 0x3c46e6d7, 0x3c491150, 0x3c4b41d2,
-    0x3c4d786e, 0x3c4fb536, 0x3c51f83b, 0x3c54418e, 0x3c569140, 0x3c58e764, 0x3c5b440b, 0x3c5da748,
-    0x3c60112d, 0x3c6281cc, 0x3c64f939, 0x3c677786, 0x3c69fcc6, 0x3c6c890c, 0x3c6f1c6e, 0x3c71b6fd,
-    0x3c7458ce, 0x3c7701f6, 0x3c79b289, 0x3c7c6a9b, 0x3c7f2a41, 0x3c80f8c9, 0x3c826050, 0x3c83cbc2,
-    0x3c853b29, 0x3c86ae90, 0x3c882602, 0x3c89a18b, 0x3c8b2136, 0x3c8ca50f, 0x3c8e2d21, 0x3c8fb977,
-    0x3c914a1f, 0x3c92df23, 0x3c947891, 0x3c961674, 0x3c97b8d8, 0x3c995fcb, 0x3c9b0b59, 0x3c9cbb8f,
+    0x3c1e707a, 0x3c202a27, 0x3c21e8a3, 0x3c23abfb, 0x3c25743e, 0x3c274179, 0x3c2913b9, 0x3c2aeb0d, 0x3c2cc783,
+    0x3c2ea92a, 0x3c30900f, 0x3c327c41, 0x3c346dcf, 0x3c3664c9, 0x3c38613c, 0x3c3a6339, 0x3c3c6acf, 0x3c3e780d,
+    0x3c408b03, 0x3c42a3c1, 0x3c44c258, 0x3c46e6d7, 0x3c491150, 0x3c4b41d2, 0x3c4d786e, 0x3c4fb536, 0x3c51f83b,
+    0x3c54418e, 0x3c569140, 0x3c58e764, 0x3c5b440b, 0x3c5da748, 0x3c60112d, 0x3c6281cc, 0x3c64f939, 0x3c677786,
+    0x3c69fcc6, 0x3c6c890c, 0x3c6f1c6e, 0x3c71b6fd, 0x3c7458ce, 0x3c7701f6, 0x3c79b289, 0x3c7c6a9b, 0x3c7f2a41,
+    0x3c80f8c9, 0x3c826050, 0x3c83cbc2, 0x3c853b29, 0x3c86ae90, 0x3c882602, 0x3c89a18b, 0x3c8b2136, 0x3c8ca50f,
+    0x3c8e2d21, 0x3c8fb977, 0x3c914a1f, 0x3c92df23, 0x3c947891, 0x3c961674, 0x3c97b8d8, 0x3c995fcb, 0x3c9b0b59,
+    0x3c9cbb8f,
 ];
 const EXP_A1: f32 = f32::from_bits(0x40B7AA3D);
 const EXP_A2: f32 = f32::from_bits(0x41C6BB64);
@@ -599,11 +638,17 @@ pub(crate) mod x8 {
         let mut i = 0;
         while i < n {
             let x = _mm256_loadu_ps(args.as_ptr().add(i));
-            let x = _mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(x, k(-2079.4417)), k(2079.4417)), k(f32::from_bits(0x42B8AA3B)));
+            let x = _mm256_mul_ps(
+                _mm256_min_ps(_mm256_max_ps(x, k(-2079.4417)), k(2079.4417)),
+                k(f32::from_bits(0x42B8AA3B)),
+            );
             // rne: ties to even, as the current rounding mode does.
             let xi = _mm256_cvtps_epi32(_mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(x));
             let xf = _mm256_mul_ps(_mm256_sub_ps(x, _mm256_cvtepi32_ps(xi)), k(0.015625));
-            let e = _mm256_min_epi32(_mm256_max_epi32(_mm256_add_epi32(_mm256_srai_epi32::<6>(xi), ki(127)), ki(0)), ki(255));
+            let e = _mm256_min_epi32(
+                _mm256_max_epi32(_mm256_add_epi32(_mm256_srai_epi32::<6>(xi), ki(127)), ki(0)),
+                ki(255),
+            );
             let t = _mm256_i32gather_ps::<4>(EXP_TAB.as_ptr() as *const f32, _mm256_and_si256(xi, ki(63)));
             let tab = _mm256_mul_ps(t, _mm256_castsi256_ps(_mm256_slli_epi32::<23>(e)));
             let mut z = _mm256_add_ps(xf, k(EXP_A1));
@@ -630,7 +675,10 @@ mod tests {
         if !crate::simd::avx2_fma() {
             return;
         }
-        let args: Vec<f32> = (0..40_000).map(|i| -2500.0 + i as f32 * 0.0625 + (i % 7) as f32 * 1e-3).chain([0.0, -0.0, 3000.0, -3000.0]).collect();
+        let args: Vec<f32> = (0..40_000)
+            .map(|i| -2500.0 + i as f32 * 0.0625 + (i % 7) as f32 * 1e-3)
+            .chain([0.0, -0.0, 3000.0, -3000.0])
+            .collect();
         let mut out = vec![0f32; args.len()];
         // SAFETY: the CPU has AVX2 and FMA (checked above).
         let done = unsafe { x8::exp32f(&args, &mut out) };

@@ -28,7 +28,11 @@ fn keypoint_order(a: &KeyPoint, b: &KeyPoint) -> Ordering {
 fn order_key(k: &KeyPoint) -> (u128, u64) {
     let up = |v: f32| {
         let b = (v + 0.0).to_bits();
-        if b >> 31 == 1 { !b } else { b | 1 << 31 }
+        if b >> 31 == 1 {
+            !b
+        } else {
+            b | 1 << 31
+        }
     };
     let down = |v: f32| !up(v);
     let octave_down = !((k.octave as u32) ^ 1 << 31);

@@ -91,7 +91,15 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
 }
 
 #[inline(always)]
-fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize, s: &mut Scratch) -> [f32; 36] {
+fn orientation_hist_with(
+    img: &Plane,
+    r: usize,
+    c: usize,
+    radius: i32,
+    sigma: f32,
+    lanes: usize,
+    s: &mut Scratch,
+) -> [f32; 36] {
     let expf_scale = -1.0 / ((2.0 * sigma) * sigma);
     let (rows, cols) = (img.height as i64, img.width as i64);
     let Scratch { dxs, dys, wts, w_args, weight_rows, oris, mags, offsets, prods } = s;
@@ -105,7 +113,9 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
     let span = 2 * rr + 1;
     w_args.clear();
     for i in 0..=rr {
-        w_args.extend((0..span).map(|k| ((i * i + (k as isize - rr as isize).pow(2) as usize) as i32) as f32 * expf_scale));
+        w_args.extend(
+            (0..span).map(|k| ((i * i + (k as isize - rr as isize).pow(2) as usize) as i32) as f32 * expf_scale),
+        );
     }
     // Eight floats of room after the last row (see the samples below).
     weight_rows.clear();
@@ -212,11 +222,7 @@ fn orientation_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f3
         let ci = t[i + 2];
         // Bins 0..31 go through the SIMD loop, 32..35 through the scalar
         // tail, which GCC fused in a different order.
-        *hi = if i < 32 {
-            fma(a, 0.0625, fma(b, 0.25, ci * 0.375))
-        } else {
-            fma(ci, 0.375, fma(a, 0.0625, b * 0.25))
-        };
+        *hi = if i < 32 { fma(a, 0.0625, fma(b, 0.25, ci * 0.375)) } else { fma(ci, 0.375, fma(a, 0.0625, b * 0.25)) };
     }
     h
 }
@@ -320,7 +326,11 @@ mod x86 {
             // Eight samples' bins and products at once (a partial group
             // computes lanes past n from zeros, never read).
             let (o, wt, mg) = if m == 8 {
-                (_mm256_loadu_ps(oris.as_ptr().add(k)), _mm256_loadu_ps(wts.as_ptr().add(k)), _mm256_loadu_ps(mags.as_ptr().add(k)))
+                (
+                    _mm256_loadu_ps(oris.as_ptr().add(k)),
+                    _mm256_loadu_ps(wts.as_ptr().add(k)),
+                    _mm256_loadu_ps(mags.as_ptr().add(k)),
+                )
             } else {
                 let mut a = [[0f32; 8]; 3];
                 a[0][..m].copy_from_slice(&oris[k..k + m]);
@@ -329,8 +339,13 @@ mod x86 {
                 (_mm256_loadu_ps(a[0].as_ptr()), _mm256_loadu_ps(a[1].as_ptr()), _mm256_loadu_ps(a[2].as_ptr()))
             };
             // cvRound((n/360)·ori), then into 0..36 as the scalar loop does.
-            let mut b = _mm256_cvtps_epi32(_mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(_mm256_mul_ps(scale, o)));
-            b = _mm256_sub_epi32(b, _mm256_and_si256(_mm256_cmpgt_epi32(b, _mm256_sub_epi32(n36, _mm256_set1_epi32(1))), n36));
+            let mut b = _mm256_cvtps_epi32(_mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(
+                _mm256_mul_ps(scale, o),
+            ));
+            b = _mm256_sub_epi32(
+                b,
+                _mm256_and_si256(_mm256_cmpgt_epi32(b, _mm256_sub_epi32(n36, _mm256_set1_epi32(1))), n36),
+            );
             b = _mm256_add_epi32(b, _mm256_and_si256(_mm256_cmpgt_epi32(zero, b), n36));
             // Already 0..36 for every finite orientation; the unsigned
             // clamp only keeps a NaN's bin from addressing outside ONE_HOT.

@@ -20,9 +20,7 @@ impl CvRng {
 
     #[inline]
     pub fn next_u32(&mut self) -> u32 {
-        self.state = (self.state & 0xFFFF_FFFF)
-            .wrapping_mul(Self::COEFF)
-            .wrapping_add(self.state >> 32);
+        self.state = (self.state & 0xFFFF_FFFF).wrapping_mul(Self::COEFF).wrapping_add(self.state >> 32);
         self.state as u32
     }
 
@@ -322,10 +320,7 @@ impl Complex {
     #[inline]
     fn div(self, o: Complex) -> Complex {
         let t = 1.0 / (o.re * o.re + o.im * o.im);
-        Complex::new(
-            (self.re * o.re + self.im * o.im) * t,
-            (-self.re * o.im + self.im * o.re) * t,
-        )
+        Complex::new((self.re * o.re + self.im * o.im) * t, (-self.re * o.im + self.im * o.re) * t)
     }
 }
 
@@ -365,7 +360,9 @@ fn durand_kerner(c: &[f64], max_iters: usize, skip_cycles: bool) -> (Vec<Complex
     // history[t·n..] = the roots after t sweeps, fingerprints[t] a hash of
     // their bits (the states are compared in full when the hashes agree).
     let fingerprint = |r: &[Complex]| {
-        r.iter().flat_map(|z| [z.re.to_bits(), z.im.to_bits()]).fold(0u64, |h, v| (h ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29))
+        r.iter()
+            .flat_map(|z| [z.re.to_bits(), z.im.to_bits()])
+            .fold(0u64, |h, v| (h ^ v).wrapping_mul(0x9E37_79B9_7F4A_7C15).rotate_left(29))
     };
     let same = |a: &[Complex], b: &[Complex]| {
         a.iter().zip(b).all(|(x, y)| x.re.to_bits() == y.re.to_bits() && x.im.to_bits() == y.im.to_bits())
@@ -515,18 +512,30 @@ mod tests {
         assert_close(
             &s.u,
             &[
-                0.29393238748230277, -0.07991740139595123, 0.9524793753898673,
-                0.3442939681958901, -0.9207540831782229, -0.1835036287776279,
-                0.8916644071918991, 0.3818705634959947, -0.24312436669813803,
+                0.29393238748230277,
+                -0.07991740139595123,
+                0.9524793753898673,
+                0.3442939681958901,
+                -0.9207540831782229,
+                -0.1835036287776279,
+                0.8916644071918991,
+                0.3818705634959947,
+                -0.24312436669813803,
             ],
             1e-15,
         );
         assert_close(
             &s.vt,
             &[
-                0.21121723906541148, 0.43608168824267746, 0.8747685631645671,
-                -0.361617818051141, -0.7965953183384676, 0.48442589987444684,
-                0.9080858062922891, -0.4186510002145606, -0.01055975519750874,
+                0.21121723906541148,
+                0.43608168824267746,
+                0.8747685631645671,
+                -0.361617818051141,
+                -0.7965953183384676,
+                0.48442589987444684,
+                0.9080858062922891,
+                -0.4186510002145606,
+                -0.01055975519750874,
             ],
             1e-15,
         );
@@ -543,10 +552,22 @@ mod tests {
         assert_close(
             &s.vt,
             &[
-                0.1752839522841622, 0.3865462858036976, 0.5258518568524866, 0.7371141903720221,
-                -0.2293662342302739, 0.6587224774248254, -0.6880987026908219, 0.19999000896427752,
-                -0.903696114115064, 0.12909944487358055, 0.3872983346207416, -0.12909944487358047,
-                -0.31622776601683783, -0.6324555320336759, -0.316227766016838, 0.6324555320336759,
+                0.1752839522841622,
+                0.3865462858036976,
+                0.5258518568524866,
+                0.7371141903720221,
+                -0.2293662342302739,
+                0.6587224774248254,
+                -0.6880987026908219,
+                0.19999000896427752,
+                -0.903696114115064,
+                0.12909944487358055,
+                0.3872983346207416,
+                -0.12909944487358047,
+                -0.31622776601683783,
+                -0.6324555320336759,
+                -0.316227766016838,
+                0.6324555320336759,
             ],
             1e-15,
         );
@@ -598,7 +619,10 @@ mod tests {
                 let mut poly = vec![Complex::new(1.0, 0.0)];
                 while poly.len() < 11 {
                     let scale = 10f64.powf(3.0 * unit());
-                    let root = Complex::new(scale * unit(), if poly.len() < 10 && unit() > 0.0 { scale * unit() } else { 0.0 });
+                    let root = Complex::new(
+                        scale * unit(),
+                        if poly.len() < 10 && unit() > 0.0 { scale * unit() } else { 0.0 },
+                    );
                     let pair = if root.im != 0.0 { vec![root, Complex::new(root.re, -root.im)] } else { vec![root] };
                     for r in pair {
                         let mut next = vec![Complex::new(0.0, 0.0); poly.len() + 1];

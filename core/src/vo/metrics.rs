@@ -44,20 +44,13 @@ pub fn ate_rmse(est: &[[f64; 3]], gt: &[[f64; 3]]) -> Result<f64> {
             gt.len()
         )));
     }
-    let sum: f64 = est
-        .iter()
-        .zip(gt)
-        .map(|(e, g)| (0..3).map(|k| (e[k] - g[k]) * (e[k] - g[k])).sum::<f64>())
-        .sum();
+    let sum: f64 = est.iter().zip(gt).map(|(e, g)| (0..3).map(|k| (e[k] - g[k]) * (e[k] - g[k])).sum::<f64>()).sum();
     Ok((sum / est.len() as f64).sqrt())
 }
 
 /// Euclidean distance between the two trajectories, frame by frame.
 pub fn position_differences(a: &[[f64; 3]], b: &[[f64; 3]]) -> Vec<f64> {
-    a.iter()
-        .zip(b)
-        .map(|(p, q)| (0..3).map(|k| (p[k] - q[k]) * (p[k] - q[k])).sum::<f64>().sqrt())
-        .collect()
+    a.iter().zip(b).map(|(p, q)| (0..3).map(|k| (p[k] - q[k]) * (p[k] - q[k])).sum::<f64>().sqrt()).collect()
 }
 
 /// (max, median) of a list of non-negative numbers; (0, 0) when empty.
@@ -82,10 +75,7 @@ mod tests {
         // math.dist((0.1, 0.2, 0.3), (0.4, 0.5, 0.6)) in CPython 3.11.
         assert_eq!(dist3(&[0.1, 0.2, 0.3], &[0.4, 0.5, 0.6]), 0.5196152422706632);
         // math.dist((-0.4686, -0.0283, 1.3347), (-0.9381, -0.0511, 2.1234)) in CPython 3.11.
-        assert_eq!(
-            dist3(&[-0.4686, -0.0283, 1.3347], &[-0.9381, -0.0511, 2.1234]),
-            0.9181491055378752
-        );
+        assert_eq!(dist3(&[-0.4686, -0.0283, 1.3347], &[-0.9381, -0.0511, 2.1234]), 0.9181491055378752);
     }
 
     #[test]

@@ -57,9 +57,7 @@ impl Default for Camera {
 impl Camera {
     /// Checks the intrinsics are usable (finite, positive focal lengths).
     pub fn validate(&self) -> crate::Result<()> {
-        let ok = [self.fx, self.fy, self.cx, self.cy].iter().all(|v| v.is_finite())
-            && self.fx > 0.0
-            && self.fy > 0.0;
+        let ok = [self.fx, self.fy, self.cx, self.cy].iter().all(|v| v.is_finite()) && self.fx > 0.0 && self.fy > 0.0;
         if ok {
             Ok(())
         } else {
@@ -82,9 +80,7 @@ impl Camera {
 }
 
 pub fn mat_mul(a: &Mat3, b: &Mat3) -> Mat3 {
-    std::array::from_fn(|r| {
-        std::array::from_fn(|c| a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c])
-    })
+    std::array::from_fn(|r| std::array::from_fn(|c| a[r][0] * b[0][c] + a[r][1] * b[1][c] + a[r][2] * b[2][c]))
 }
 
 pub fn mat_vec(a: &Mat3, v: &Vec3) -> Vec3 {

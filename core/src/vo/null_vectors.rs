@@ -40,17 +40,10 @@ mod x86 {
                 s ^= s >> 7;
                 s ^= s << 17;
                 let x = f64::from_bits(0x3fe0_0000_0000_0000 | (s & 0x000f_ffff_ffff_ffff));
-                let y = x
-                    * f64::from_bits(0x3f00_0000_0000_0000 | (s >> 12 & 0x000f_ffff_ffff_ffff))
-                    * 4096.0;
+                let y = x * f64::from_bits(0x3f00_0000_0000_0000 | (s >> 12 & 0x000f_ffff_ffff_ffff)) * 4096.0;
                 // SAFETY: AVX2 checked by the caller before this runs.
                 let v = unsafe { hypot_lanes([x, y, -y, x * 0.75], [y, x, x * 0.5, -y]) };
-                v == [
-                    x.hypot(y),
-                    y.hypot(x),
-                    (-y).hypot(x * 0.5),
-                    (x * 0.75).hypot(-y),
-                ]
+                v == [x.hypot(y), y.hypot(x), (-y).hypot(x * 0.5), (x * 0.75).hypot(-y)]
             })
         })
     }
@@ -58,11 +51,7 @@ mod x86 {
     #[target_feature(enable = "avx2")]
     unsafe fn hypot_lanes(x: [f64; 4], y: [f64; 4]) -> [f64; 4] {
         let all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-        let r = hypot(
-            _mm256_loadu_pd(x.as_ptr()),
-            _mm256_loadu_pd(y.as_ptr()),
-            all,
-        );
+        let r = hypot(_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(y.as_ptr()), all);
         let mut out = [0.0; 4];
         _mm256_storeu_pd(out.as_mut_ptr(), r);
         out
@@ -99,30 +88,18 @@ mod x86 {
         // h <= 2·ay: δ = h − ay, t1 = ax·(2δ − ax), t2 = (δ − 2(ax − ay))·δ.
         let d_near = _mm256_sub_pd(h, ay);
         let t1_near = _mm256_mul_pd(ax, _mm256_sub_pd(_mm256_mul_pd(two, d_near), ax));
-        let t2_near = _mm256_mul_pd(
-            _mm256_sub_pd(d_near, _mm256_mul_pd(two, _mm256_sub_pd(ax, ay))),
-            d_near,
-        );
+        let t2_near = _mm256_mul_pd(_mm256_sub_pd(d_near, _mm256_mul_pd(two, _mm256_sub_pd(ax, ay))), d_near);
         // else: δ = h − ax, t1 = 2δ·(ax − 2ay), t2 = (4δ − ay)·ay + δ·δ.
         let d_far = _mm256_sub_pd(h, ax);
-        let t1_far = _mm256_mul_pd(
-            _mm256_mul_pd(two, d_far),
-            _mm256_sub_pd(ax, _mm256_mul_pd(two, ay)),
-        );
+        let t1_far = _mm256_mul_pd(_mm256_mul_pd(two, d_far), _mm256_sub_pd(ax, _mm256_mul_pd(two, ay)));
         let t2_far = _mm256_add_pd(
             _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(splat(4.0), d_far), ay), ay),
             _mm256_mul_pd(d_far, d_far),
         );
         let (t1, t2) = (select(near, t1_far, t1_near), select(near, t2_far, t2_near));
-        let kernel = _mm256_sub_pd(
-            h,
-            _mm256_div_pd(_mm256_add_pd(t1, t2), _mm256_mul_pd(two, h)),
-        );
+        let kernel = _mm256_sub_pd(h, _mm256_div_pd(_mm256_add_pd(t1, t2), _mm256_mul_pd(two, h)));
         // ay <= ax·2^-54: ax + ay (ay is below half an ulp of ax).
-        let widely = _mm256_cmp_pd::<_CMP_LE_OQ>(
-            ay,
-            _mm256_mul_pd(ax, splat(f64::from_bits(0x3c90_0000_0000_0000))),
-        );
+        let widely = _mm256_cmp_pd::<_CMP_LE_OQ>(ay, _mm256_mul_pd(ax, splat(f64::from_bits(0x3c90_0000_0000_0000))));
         let r = select(widely, kernel, _mm256_add_pd(ax, ay));
         // The common case: ax <= 2^511 and ay >= 2^-459 (false for NaN;
         // an infinite ax fails the first test).
@@ -130,10 +107,7 @@ mod x86 {
             _mm256_cmp_pd::<_CMP_LE_OQ>(ax, splat(f64::from_bits(0x5fe0_0000_0000_0000))),
             _mm256_cmp_pd::<_CMP_GE_OQ>(ay, splat(f64::from_bits(0x2340_0000_0000_0000))),
         );
-        let common = _mm256_or_pd(
-            common,
-            _mm256_xor_pd(live, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))),
-        );
+        let common = _mm256_or_pd(common, _mm256_xor_pd(live, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))));
         if _mm256_movemask_pd(common) == 0b1111 {
             return r;
         }
@@ -181,8 +155,7 @@ mod x86 {
             s
         };
         let mut w: [__m256d; 4] = std::array::from_fn(|i| dot(&at[i], &at[i]));
-        let mut vt: [[__m256d; 4]; 4] =
-            std::array::from_fn(|i| std::array::from_fn(|k| splat((i == k) as u8 as f64)));
+        let mut vt: [[__m256d; 4]; 4] = std::array::from_fn(|i| std::array::from_fn(|k| splat((i == k) as u8 as f64)));
         let eps = splat(f64::EPSILON * 10.0);
         let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
         let (two, half) = (splat(2.0), splat(0.5));
@@ -205,11 +178,7 @@ mod x86 {
                     }
                     let p = _mm256_mul_pd(p, two);
                     let beta = _mm256_sub_pd(a, b);
-                    let gamma = hypot(
-                        p,
-                        beta,
-                        _mm256_xor_pd(skip, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))),
-                    );
+                    let gamma = hypot(p, beta, _mm256_xor_pd(skip, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))));
                     // beta < 0: δ = (γ − β)·0.5, s = sqrt(δ/γ), c = p/(γ·s·2);
                     // else c = sqrt((γ + β)/(γ·2)), s = p/(γ·c·2).
                     let neg = _mm256_cmp_pd::<_CMP_LT_OQ>(beta, zero);
@@ -222,10 +191,7 @@ mod x86 {
                         (c, s) = (cn, sn);
                     }
                     if neg_bits != 0b1111 {
-                        let cp = _mm256_sqrt_pd(_mm256_div_pd(
-                            _mm256_add_pd(gamma, beta),
-                            _mm256_mul_pd(gamma, two),
-                        ));
+                        let cp = _mm256_sqrt_pd(_mm256_div_pd(_mm256_add_pd(gamma, beta), _mm256_mul_pd(gamma, two)));
                         let sp = _mm256_div_pd(p, _mm256_mul_pd(_mm256_mul_pd(gamma, cp), two));
                         (c, s) = (select(neg, cp, c), select(neg, sp, s));
                     }
@@ -304,10 +270,7 @@ mod x86 {
             if !crate::simd::avx2() {
                 return;
             }
-            assert!(
-                libm_hypot_is_glibcs(),
-                "this libm's hypot is not glibc's Borges kernel"
-            );
+            assert!(libm_hypot_is_glibcs(), "this libm's hypot is not glibc's Borges kernel");
             let mut s = 0x0123_4567_89ab_cdefu64;
             let mut next = move || {
                 s ^= s << 13;
@@ -315,19 +278,7 @@ mod x86 {
                 s ^= s << 17;
                 s
             };
-            let special = [
-                0.0,
-                -0.0,
-                5e-324,
-                1e-310,
-                2.2e-308,
-                1e-300,
-                1.0,
-                1e300,
-                f64::MAX,
-                f64::INFINITY,
-                f64::NAN,
-            ];
+            let special = [0.0, -0.0, 5e-324, 1e-310, 2.2e-308, 1e-300, 1.0, 1e300, f64::MAX, f64::INFINITY, f64::NAN];
             for n in 0..400_000 {
                 let pick = |r: u64| -> f64 {
                     match r % 8 {
@@ -335,10 +286,7 @@ mod x86 {
                         // Exponents over the whole range.
                         1 => f64::from_bits(r >> 1),
                         // Near 1, and nearly equal pairs below.
-                        _ => {
-                            f64::from_bits(0x3ff0_0000_0000_0000 | (r >> 12))
-                                * [1.0, -1.0][(r >> 3) as usize & 1]
-                        }
+                        _ => f64::from_bits(0x3ff0_0000_0000_0000 | (r >> 12)) * [1.0, -1.0][(r >> 3) as usize & 1],
                     }
                 };
                 let x: [f64; 4] = std::array::from_fn(|_| pick(next()));
@@ -401,28 +349,20 @@ mod tests {
                 }
                 1 => std::array::from_fn(|_| std::array::from_fn(|_| rnd())),
                 2 => {
-                    let mut m: [[f64; 4]; 4] =
-                        std::array::from_fn(|_| std::array::from_fn(|_| rnd()));
+                    let mut m: [[f64; 4]; 4] = std::array::from_fn(|_| std::array::from_fn(|_| rnd()));
                     let (c, d) = ((n / 4) % 4, (n / 16) % 4);
                     for row in m.iter_mut() {
                         row[c] = if n % 2 == 0 { 0.0 } else { row[d] };
                     }
                     m
                 }
-                _ => std::array::from_fn(|r| {
-                    std::array::from_fn(|c| if r == c { rnd() } else { 0.0 })
-                }),
+                _ => std::array::from_fn(|r| std::array::from_fn(|c| if r == c { rnd() } else { 0.0 })),
             });
             kinds[n % 4] += 1;
             let got = null_vectors_4x4(&ms);
             for l in 0..4 {
                 let want = null_vector_4x4(&ms[l]);
-                assert_eq!(
-                    got[l].map(f64::to_bits),
-                    want.map(f64::to_bits),
-                    "lane {l} of draw {n}: {:?}",
-                    ms[l]
-                );
+                assert_eq!(got[l].map(f64::to_bits), want.map(f64::to_bits), "lane {l} of draw {n}: {:?}", ms[l]);
             }
         }
         assert!(kinds.iter().all(|&k| k == 5_000));

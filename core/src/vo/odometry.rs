@@ -218,11 +218,10 @@ impl Odometry {
                 )));
             }
             // points1 = current frame, points2 = previous frame, as the lab calls it.
-            let ess = find_essential_mat(&cur, &refs, cam, ransac)
-                .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+            let ess =
+                find_essential_mat(&cur, &refs, cam, ransac).map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
             let e = ess.essential().map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
-            let pose = recover_pose(e, &cur, &refs, cam)
-                .map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
+            let pose = recover_pose(e, &cur, &refs, cam).map_err(|e| Error::Odometry(format!("frame {i}: {e}")))?;
             Ok(Tracked { pyr, refs, cur, ess, pose })
         };
         // `run` detects on another thread ahead of this one; a caller of
@@ -359,9 +358,8 @@ fn run_with_workers(
                     for (i, frame) in rx_img {
                         // Frame 1 never re-detects (§VO-5: it only sets R, t).
                         let item = frame.map(|img| {
-                            let points = (first + i != 1).then(|| {
-                                crate::sift::par::with_threads(per_worker, || detector_ref(&img))
-                            });
+                            let points = (first + i != 1)
+                                .then(|| crate::sift::par::with_threads(per_worker, || detector_ref(&img)));
                             (img, points)
                         });
                         let failed = item.is_err();
@@ -525,8 +523,8 @@ mod tests {
             let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
             odo.min_points = 10_000;
             let mut seen = Vec::new();
-            let got = run_with_workers(&mut odo, 6, &poses, |k| Ok(img(k)), &mut |d, n| seen.push((d, n)), workers)
-                .unwrap();
+            let got =
+                run_with_workers(&mut odo, 6, &poses, |k| Ok(img(k)), &mut |d, n| seen.push((d, n)), workers).unwrap();
             assert_eq!(got, want, "{workers} workers");
             assert!(got[2..].iter().all(|r| r.redetected));
             assert_eq!(seen, (1..=6).map(|d| (d, 6)).collect::<Vec<_>>());

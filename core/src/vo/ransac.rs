@@ -137,7 +137,13 @@ fn sampson_errors(e: &Mat3, pts: &Columns, t: f32, err: &mut Vec<f32>) -> usize 
 
 /// findEssentialMat on already normalized coordinates; `thr` is the
 /// threshold divided by the mean focal length.
-pub fn ransac_normalized(p1: &[[f64; 2]], p2: &[[f64; 2]], thr: f64, prob: f64, max_iters: usize) -> Result<EssentialResult> {
+pub fn ransac_normalized(
+    p1: &[[f64; 2]],
+    p2: &[[f64; 2]],
+    thr: f64,
+    prob: f64,
+    max_iters: usize,
+) -> Result<EssentialResult> {
     let n = p1.len();
     if n != p2.len() {
         return Err(Error::InvalidArgument(format!(
@@ -147,9 +153,7 @@ pub fn ransac_normalized(p1: &[[f64; 2]], p2: &[[f64; 2]], thr: f64, prob: f64, 
         )));
     }
     if n < 5 {
-        return Err(Error::Odometry(format!(
-            "only {n} tracked points: the essential matrix needs at least 5"
-        )));
+        return Err(Error::Odometry(format!("only {n} tracked points: the essential matrix needs at least 5")));
     }
     let sample = |idx: &[usize; 5]| {
         let a: [[f64; 2]; 5] = std::array::from_fn(|i| p1[idx[i]]);
@@ -264,9 +268,23 @@ pub(crate) mod tests {
 
     // cv2.findEssentialMat(p1, p2, focal=718.856, pp=(607.1928, 185.2157),
     // method=cv2.RANSAC, prob=0.999, threshold=1.0), 4.8.0.76 wheel.
-    const OPENCV_E: [f64; 9] = [-0.003027709589195589, -0.7059965588327499, 0.017700551497470813, 0.7068382201135524, -0.0034119210600523824, 0.01298659647089793, -0.014288717556143925, -0.03523154313259714, 0.0006252841179491471];
+    const OPENCV_E: [f64; 9] = [
+        -0.003027709589195589,
+        -0.7059965588327499,
+        0.017700551497470813,
+        0.7068382201135524,
+        -0.0034119210600523824,
+        0.01298659647089793,
+        -0.014288717556143925,
+        -0.03523154313259714,
+        0.0006252841179491471,
+    ];
     const OPENCV_INLIERS: usize = 241;
-    const OPENCV_OUTLIERS: &[usize] = &[0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 80, 85, 90, 95, 100, 105, 110, 115, 120, 125, 130, 135, 140, 145, 150, 155, 160, 170, 175, 180, 185, 190, 195, 200, 205, 210, 215, 220, 225, 230, 235, 240, 245, 250, 255, 260, 265, 270, 275, 280, 285, 290, 295];
+    const OPENCV_OUTLIERS: &[usize] = &[
+        0, 5, 10, 15, 20, 25, 30, 35, 40, 45, 50, 55, 60, 65, 70, 75, 80, 85, 90, 95, 100, 105, 110, 115, 120, 125,
+        130, 135, 140, 145, 150, 155, 160, 170, 175, 180, 185, 190, 195, 200, 205, 210, 215, 220, 225, 230, 235, 240,
+        245, 250, 255, 260, 265, 270, 275, 280, 285, 290, 295,
+    ];
 
     #[test]
     fn matches_opencv_on_a_scene_with_outliers() {

@@ -130,10 +130,7 @@ pub fn parse_golden(bytes: &[u8], name: &str) -> Golden {
             }
         })
         .collect();
-    let descriptors = bytes[kp_end..]
-        .chunks_exact(128)
-        .map(|c| <[u8; 128]>::try_from(c).unwrap())
-        .collect();
+    let descriptors = bytes[kp_end..].chunks_exact(128).map(|c| <[u8; 128]>::try_from(c).unwrap()).collect();
     Golden { width, height, keypoints, descriptors }
 }
 
@@ -156,4 +153,3 @@ pub fn set_frames(set: &GoldenSet, kind: &str) -> Vec<String> {
     assert!(!ids.is_empty(), "no goldens in {}", dir.display());
     ids
 }
-

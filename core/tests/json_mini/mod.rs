@@ -150,7 +150,11 @@ impl Parser<'_> {
             _ => {
                 let start = self.i;
                 while self.i < self.s.len()
-                    && matches!(self.s[self.i], b'-' | b'+' | b'.' | b'e' | b'E' | b'0'..=b'9' | b'N' | b'a' | b'I' | b'n' | b'f' | b'i' | b'y' | b't')
+                    && matches!(
+                        self.s[self.i],
+                        b'-' | b'+' | b'.' | b'e' | b'E' | b'0'
+                            ..=b'9' | b'N' | b'a' | b'I' | b'n' | b'f' | b'i' | b'y' | b't'
+                    )
                 {
                     self.i += 1;
                 }

@@ -70,30 +70,12 @@ unsafe fn pairs_i16(p: *const i16) -> Pairs {
 /// 2^(S−1)) >> S`, packed to i16 in the row layout (block part, tail part).
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn blend<const S: i32>(
-    top: &Pairs,
-    bot: &Pairs,
-    wt: __m256i,
-    wb: __m256i,
-) -> (__m256i, __m128i) {
+unsafe fn blend<const S: i32>(top: &Pairs, bot: &Pairs, wt: __m256i, wb: __m256i) -> (__m256i, __m128i) {
     (
-        _mm256_packs_epi32(
-            mix::<S>(top.a, bot.a, wt, wb),
-            mix::<S>(top.b, bot.b, wt, wb),
-        ),
+        _mm256_packs_epi32(mix::<S>(top.a, bot.a, wt, wb), mix::<S>(top.b, bot.b, wt, wb)),
         _mm_packs_epi32(
-            mix4::<S>(
-                top.ta,
-                bot.ta,
-                _mm256_castsi256_si128(wt),
-                _mm256_castsi256_si128(wb),
-            ),
-            mix4::<S>(
-                top.tb,
-                bot.tb,
-                _mm256_castsi256_si128(wt),
-                _mm256_castsi256_si128(wb),
-            ),
+            mix4::<S>(top.ta, bot.ta, _mm256_castsi256_si128(wt), _mm256_castsi256_si128(wb)),
+            mix4::<S>(top.tb, bot.tb, _mm256_castsi256_si128(wt), _mm256_castsi256_si128(wb)),
         ),
     )
 }
@@ -117,10 +99,7 @@ unsafe fn mix4<const S: i32>(t: __m128i, b: __m128i, wt: __m128i, wb: __m128i) -
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn weight_pairs(w: &[i32; 4]) -> (__m256i, __m256i) {
-    (
-        _mm256_set1_epi32((w[1] << 16) | (w[0] & 0xffff)),
-        _mm256_set1_epi32((w[3] << 16) | (w[2] & 0xffff)),
-    )
+    (_mm256_set1_epi32((w[1] << 16) | (w[0] & 0xffff)), _mm256_set1_epi32((w[3] << 16) | (w[2] & 0xffff)))
 }
 
 #[target_feature(enable = "avx2")]
@@ -133,10 +112,7 @@ unsafe fn store(row: &mut Row, lo: __m256i, tail: __m128i) {
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn load(row: &Row) -> (__m256i, __m128i) {
-    (
-        _mm256_load_si256(row.0.as_ptr() as *const __m256i),
-        _mm_load_si128(row.0.as_ptr().add(16) as *const __m128i),
-    )
+    (_mm256_load_si256(row.0.as_ptr() as *const __m256i), _mm_load_si128(row.0.as_ptr().add(16) as *const __m128i))
 }
 
 /// Interpolates the 21 rows of an 8-bit level window at `p` into `out`.
@@ -199,33 +175,14 @@ impl Sum {
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn load_patch(
-    prev: &Level,
-    deriv: &Deriv,
-    ix: i32,
-    iy: i32,
-    w: &[i32; 4],
-    p: &mut Patch,
-) -> (f32, f32, f32) {
+unsafe fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
     let base = prev.offset(ix, iy);
     assert!(base + WIN * prev.stride + 32 <= prev.padded.len());
     warp_u8(prev.padded[base..].as_ptr(), prev.stride, w, &mut p.t);
     let dbase = deriv.offset(ix, iy);
     assert!(dbase + WIN * deriv.stride + 28 <= deriv.ix.len() && deriv.ix.len() == deriv.iy.len());
-    warp_i16(
-        deriv.ix[dbase..].as_ptr(),
-        deriv.stride,
-        w,
-        &mut p.x,
-        &mut p.ax,
-    );
-    warp_i16(
-        deriv.iy[dbase..].as_ptr(),
-        deriv.stride,
-        w,
-        &mut p.y,
-        &mut p.ay,
-    );
+    warp_i16(deriv.ix[dbase..].as_ptr(), deriv.stride, w, &mut p.x, &mut p.ax);
+    warp_i16(deriv.iy[dbase..].as_ptr(), deriv.stride, w, &mut p.y, &mut p.ay);
 
     // X², Y² are their own bounds; XY is bounded by |X||Y|.
     let (mut xx, mut yy, mut xy, mut bxy) = (Sum::new(), Sum::new(), Sum::new(), Sum::new());
@@ -269,7 +226,8 @@ unsafe fn tensor_sums_replay(x: &Win16, y: &Win16) -> ([[f32; 4]; 3], [f32; 3]) 
     let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
     let (mut lxx, mut lxy, mut lyy) = (_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps());
     let mut tail = _mm_setzero_ps();
-    let products = |a: __m256i, b: __m256i| _mm256_permutevar8x32_ps(_mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b)), split);
+    let products =
+        |a: __m256i, b: __m256i| _mm256_permutevar8x32_ps(_mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b)), split);
     for r in 0..WIN {
         let (xr, yr) = (x[r].0.as_ptr(), y[r].0.as_ptr());
         for block in [0, 8] {
@@ -501,14 +459,7 @@ impl Kernels for Avx2 {
     }
 
     #[inline(always)]
-    fn load_patch(
-        prev: &Level,
-        deriv: &Deriv,
-        ix: i32,
-        iy: i32,
-        w: &[i32; 4],
-        p: &mut Patch,
-    ) -> (f32, f32, f32) {
+    fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
         // SAFETY: only reached on AVX2 CPUs (run_job checks); every load is
         // inside the padded planes (asserted in the callee).
         unsafe { load_patch(prev, deriv, ix, iy, w, p) }
@@ -544,13 +495,8 @@ mod tests {
                 s ^= s >> 7;
                 s ^= s << 17;
                 let (x, y) = ((i % w) as f64, (i / w) as f64);
-                let smooth =
-                    128.0 + 60.0 * (x * 0.11 + y * 0.07).sin() + 40.0 * (y * 0.13 - x * 0.05).cos();
-                let n = if noise == 0 {
-                    0
-                } else {
-                    (s % (2 * noise as u64 + 1)) as i64 - noise as i64
-                };
+                let smooth = 128.0 + 60.0 * (x * 0.11 + y * 0.07).sin() + 40.0 * (y * 0.13 - x * 0.05).cos();
+                let n = if noise == 0 { 0 } else { (s % (2 * noise as u64 + 1)) as i64 - noise as i64 };
                 (smooth as i64 + n).clamp(0, 255) as u8
             })
             .collect();
@@ -589,7 +535,8 @@ mod tests {
                 let a = Scalar::load_patch(&prev, &deriv, ix, iy, &w0, &mut sp);
                 let b = Avx2::load_patch(&prev, &deriv, ix, iy, &w0, &mut vp);
                 // Whether ΣX²'s tail went through the replay (its bound is itself).
-                let tail_xx: u64 = vp.x.iter().map(|r| r.0[16..WIN].iter().map(|&v| (v as i64 * v as i64) as u64).sum::<u64>()).sum();
+                let tail_xx: u64 =
+                    vp.x.iter().map(|r| r.0[16..WIN].iter().map(|&v| (v as i64 * v as i64) as u64).sum::<u64>()).sum();
                 tensor_replays += (tail_xx > EXACT) as usize;
                 assert_eq!(
                     [a.0.to_bits(), a.1.to_bits(), a.2.to_bits()],
@@ -627,10 +574,7 @@ mod tests {
                         .map(|y| {
                             [k, k + 4, k + 8, k + 12]
                                 .iter()
-                                .map(|&c| {
-                                    (vp.d[y].0[pos(c)] as i64 * vp.x[y].0[pos(c)] as i64)
-                                        .unsigned_abs()
-                                })
+                                .map(|&c| (vp.d[y].0[pos(c)] as i64 * vp.x[y].0[pos(c)] as i64).unsigned_abs())
                                 .sum::<u64>()
                         })
                         .sum()
@@ -642,10 +586,7 @@ mod tests {
                 }
             }
         }
-        assert!(
-            exact_seen > 100 && replay_seen > 100,
-            "exact {exact_seen}, replayed {replay_seen}"
-        );
+        assert!(exact_seen > 100 && replay_seen > 100, "exact {exact_seen}, replayed {replay_seen}");
         assert!(tensor_replays > 100 && tensor_replays < 1300, "tensor replays {tensor_replays} of 1400");
     }
 }

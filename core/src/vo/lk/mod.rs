@@ -184,9 +184,8 @@ impl Level {
         let mut padded = vec![0u8; stride * ph + SLACK];
         // Only the PAD columns on each side are reflected; the row itself
         // is one slice copy (a gather per pixel was 0.5 % of a VO run).
-        let (left, right): (Vec<usize>, Vec<usize>) = (0..PAD)
-            .map(|j| (reflect101(j as isize - PAD as isize, w), reflect101((w + j) as isize, w)))
-            .unzip();
+        let (left, right): (Vec<usize>, Vec<usize>) =
+            (0..PAD).map(|j| (reflect101(j as isize - PAD as isize, w), reflect101((w + j) as isize, w))).unzip();
         for py in 0..ph {
             let sy = reflect101(py as isize - PAD as isize, h);
             let src = &pixels[sy * w..(sy + 1) * w];
@@ -283,7 +282,9 @@ impl Deriv {
             // Interior without index arithmetic (vectorizes), the two edge
             // columns with reflect-101.
             if w > 2 {
-                for (((rx, ry), s), d) in rx[1..w - 1].iter_mut().zip(&mut ry[1..w - 1]).zip(s.windows(3)).zip(d.windows(3)) {
+                for (((rx, ry), s), d) in
+                    rx[1..w - 1].iter_mut().zip(&mut ry[1..w - 1]).zip(s.windows(3)).zip(d.windows(3))
+                {
                     *rx = s[2] - s[0];
                     *ry = 3 * d[0] + 10 * d[1] + 3 * d[2];
                 }
@@ -334,10 +335,7 @@ fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win) {
         let r0 = &level.padded[base + y * stride..][..WIN + 1];
         let r1 = &level.padded[base + (y + 1) * stride..][..WIN + 1];
         for x in 0..WIN {
-            let v = r0[x] as i32 * w[0]
-                + r0[x + 1] as i32 * w[1]
-                + r1[x] as i32 * w[2]
-                + r1[x + 1] as i32 * w[3];
+            let v = r0[x] as i32 * w[0] + r0[x + 1] as i32 * w[1] + r1[x] as i32 * w[2] + r1[x + 1] as i32 * w[3];
             row[x] = (v + (1 << (W_BITS - 5 - 1))) >> (W_BITS - 5);
         }
     }
@@ -349,10 +347,7 @@ fn warp_deriv(plane: &[i16], stride: usize, base: usize, w: &[i32; 4], out: &mut
         let r0 = &plane[base + y * stride..][..WIN + 1];
         let r1 = &plane[base + (y + 1) * stride..][..WIN + 1];
         for x in 0..WIN {
-            let v = r0[x] as i32 * w[0]
-                + r0[x + 1] as i32 * w[1]
-                + r1[x] as i32 * w[2]
-                + r1[x + 1] as i32 * w[3];
+            let v = r0[x] as i32 * w[0] + r0[x + 1] as i32 * w[1] + r1[x] as i32 * w[2] + r1[x + 1] as i32 * w[3];
             row[x] = (v + (1 << (W_BITS - 1))) >> W_BITS;
         }
     }
@@ -390,11 +385,7 @@ fn tensor_sums(gx: &Win, gy: &Win) -> (f32, f32, f32) {
 /// rounded into eight f32 lanes (P0..P3 = x/y of columns B, B+1; Q0..Q3 =
 /// x/y of columns B+2, B+3); columns 16..20 into two scalars.
 #[inline(always)]
-fn mismatch(
-    d: &Win,
-    gx: &Win,
-    gy: &Win,
-) -> (f32, f32) {
+fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
     let mut pq = [0f32; 8];
     let (mut s1, mut s2) = (0f32, 0f32);
     for y in 0..WIN {
@@ -440,8 +431,14 @@ trait Kernels {
     fn new_patch() -> Box<Self::Patch>;
     /// Interpolates T, X, Y at `(ix, iy)` of the previous level and returns
     /// the structure-tensor sums (ΣX², ΣXY, ΣY²) in OpenCV's order.
-    fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], patch: &mut Self::Patch)
-        -> (f32, f32, f32);
+    fn load_patch(
+        prev: &Level,
+        deriv: &Deriv,
+        ix: i32,
+        iy: i32,
+        w: &[i32; 4],
+        patch: &mut Self::Patch,
+    ) -> (f32, f32, f32);
     /// The mismatch vector (b1, b2) of the next-level window at `(jx, jy)`.
     fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], patch: &mut Self::Patch) -> (f32, f32);
     /// Σ|J − T| over the window (exact: it stays below 2^24).
@@ -567,8 +564,7 @@ impl Track {
         let (s11, s12, s22) = K::load_patch(cx.prev, cx.deriv, ix, iy, &wts, patch);
         let (a11, a12, a22) = (s11 * FLT_SCALE, s12 * FLT_SCALE, s22 * FLT_SCALE);
         let det = a11 * a22 - a12 * a12;
-        let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt())
-            / (2 * WIN * WIN) as f32;
+        let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt()) / (2 * WIN * WIN) as f32;
         if min_eig < cx.min_eig_threshold || det < f32::EPSILON {
             if level == 0 {
                 *status = false;
@@ -792,12 +788,7 @@ pub fn calc_optical_flow_pyr_lk_pyramids(
 
 /// `cv2.calcOpticalFlowPyrLK(prev, next, pts, None, winSize=(21,21), ...)`.
 /// Both images must have the same size.
-pub fn calc_optical_flow_pyr_lk(
-    prev: &GrayImage,
-    next: &GrayImage,
-    pts: &[[f32; 2]],
-    params: &LkParams,
-) -> LkResult {
+pub fn calc_optical_flow_pyr_lk(prev: &GrayImage, next: &GrayImage, pts: &[[f32; 2]], params: &LkParams) -> LkResult {
     lk_from_images(prev, next, pts, params, false)
 }
 
@@ -875,10 +866,8 @@ fn track_ordered(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams, scalar: b
             let chunk = n.div_ceil(threads);
             std::thread::scope(|s| {
                 let mut start = 0;
-                for ((np, st), er) in next_pts
-                    .chunks_mut(chunk)
-                    .zip(status.chunks_mut(chunk))
-                    .zip(err.chunks_mut(chunk))
+                for ((np, st), er) in
+                    next_pts.chunks_mut(chunk).zip(status.chunks_mut(chunk)).zip(err.chunks_mut(chunk))
                 {
                     let range = start..start + np.len();
                     start += np.len();
@@ -953,7 +942,8 @@ mod tests {
 
     #[test]
     fn pyr_down_fast_paths_match_the_definition() {
-        for (w, h) in [(40, 3), (41, 4), (55, 9), (72, 21), (1241, 376), (621, 188), (311, 94), (7, 5), (1, 1), (2, 3)] {
+        for (w, h) in [(40, 3), (41, 4), (55, 9), (72, 21), (1241, 376), (621, 188), (311, 94), (7, 5), (1, 1), (2, 3)]
+        {
             let src = extreme_noise(w, h, 0x9e37_79b9 ^ (w * h) as u32);
             let want = pyr_down_reference(&src, w, h);
             assert_eq!(pyr_down(&src, w, h).0, want, "{w}x{h}");
@@ -1084,21 +1074,14 @@ mod tests {
     /// bit (the kernel-level test covers the replay path on purpose).
     #[test]
     fn avx2_equals_portable_on_a_kitti_sized_pair() {
-        let prev = GrayImage::decode(include_bytes!(
-            "../../../../www/demo/MyKITTI/gray/00/image_0/000000.png"
-        ))
-        .unwrap();
-        let next = GrayImage::decode(include_bytes!(
-            "../../../../www/demo/MyKITTI/gray/00/image_0/000001.png"
-        ))
-        .unwrap();
+        let prev =
+            GrayImage::decode(include_bytes!("../../../../www/demo/MyKITTI/gray/00/image_0/000000.png")).unwrap();
+        let next =
+            GrayImage::decode(include_bytes!("../../../../www/demo/MyKITTI/gray/00/image_0/000001.png")).unwrap();
         let mut pts = Vec::new();
         for gy in 0..16 {
             for gx in 0..40 {
-                pts.push([
-                    -8.0 + 32.0 * gx as f32 + 0.37 * gy as f32,
-                    -6.0 + 24.5 * gy as f32 + 0.11 * gx as f32,
-                ]);
+                pts.push([-8.0 + 32.0 * gx as f32 + 0.37 * gy as f32, -6.0 + 24.5 * gy as f32 + 0.11 * gx as f32]);
             }
         }
         let fast = calc_optical_flow_pyr_lk(&prev, &next, &pts, &LkParams::default());
@@ -1110,11 +1093,7 @@ mod tests {
             let bits = |r: &LkResult| [r.next_pts[i][0].to_bits(), r.next_pts[i][1].to_bits()];
             assert_eq!(bits(&fast), bits(&portable), "point {i} {:?}", pts[i]);
             if fast.status[i] {
-                assert_eq!(
-                    fast.err[i].to_bits(),
-                    portable.err[i].to_bits(),
-                    "err of point {i}"
-                );
+                assert_eq!(fast.err[i].to_bits(), portable.err[i].to_bits(), "err of point {i}");
             }
         }
     }
@@ -1132,9 +1111,12 @@ mod tests {
             let got = [out.next_pts[i][0].to_bits(), out.next_pts[i][1].to_bits()];
             assert_eq!(out.status[i] as u8, g.2, "status of point {i}");
             assert_eq!(
-                got, g.1,
+                got,
+                g.1,
                 "point {i} {:?}: got {:?}, OpenCV {:?}",
-                g.0, out.next_pts[i], [f32::from_bits(g.1[0]), f32::from_bits(g.1[1])]
+                g.0,
+                out.next_pts[i],
+                [f32::from_bits(g.1[0]), f32::from_bits(g.1[1])]
             );
             if g.2 == 1 {
                 assert_eq!(out.err[i].to_bits(), g.3, "err of point {i}");

@@ -30,7 +30,8 @@ const MT16: v128 = u8x16(0, 1, 2, 3, 2, 3, 4, 5, 4, 5, 6, 7, 6, 7, 8, 9);
 /// Byte pairs of an 8-bit row at `p` (reads `p[0..32]`), zero-extended.
 #[inline(always)]
 unsafe fn pairs_u8(p: *const u8) -> Pairs {
-    let (s0, s1, s2) = (v128_load(p as *const v128), v128_load(p.add(8) as *const v128), v128_load(p.add(16) as *const v128));
+    let (s0, s1, s2) =
+        (v128_load(p as *const v128), v128_load(p.add(8) as *const v128), v128_load(p.add(16) as *const v128));
     [
         i8x16_swizzle(s0, MA),
         i8x16_swizzle(s0, MB),
@@ -60,7 +61,8 @@ unsafe fn pairs_i16(p: *const i16) -> Pairs {
 #[inline(always)]
 fn blend(top: &Pairs, bot: &Pairs, wt: v128, wb: v128, s: u32) -> Parts {
     let round = i32x4_splat(1 << (s - 1));
-    let mix = |k: usize| i32x4_shr(i32x4_add(i32x4_add(i32x4_dot_i16x8(top[k], wt), i32x4_dot_i16x8(bot[k], wb)), round), s);
+    let mix =
+        |k: usize| i32x4_shr(i32x4_add(i32x4_add(i32x4_dot_i16x8(top[k], wt), i32x4_dot_i16x8(bot[k], wb)), round), s);
     [i16x8_narrow_i32x4(mix(0), mix(1)), i16x8_narrow_i32x4(mix(2), mix(3)), i16x8_narrow_i32x4(mix(4), mix(5))]
 }
 
@@ -104,7 +106,14 @@ impl Sum {
     }
 
     fn acc(&self) -> Acc {
-        let lane = |v: v128| [i32x4_extract_lane::<0>(v), i32x4_extract_lane::<1>(v), i32x4_extract_lane::<2>(v), i32x4_extract_lane::<3>(v)];
+        let lane = |v: v128| {
+            [
+                i32x4_extract_lane::<0>(v),
+                i32x4_extract_lane::<1>(v),
+                i32x4_extract_lane::<2>(v),
+                i32x4_extract_lane::<3>(v),
+            ]
+        };
         let (b0, b1) = (lane(self.0[0]), lane(self.0[1]));
         Acc { blocks: [b0[0], b0[1], b0[2], b0[3], b1[0], b1[1], b1[2], b1[3]], tail: lane(self.0[2]) }
     }

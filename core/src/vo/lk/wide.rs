@@ -175,7 +175,12 @@ pub fn finish_mismatch(
     let (gx, ex) = sx.groups();
     let (gy, ey) = sy.groups();
     // T0 + T2 = (P0 + Q0) + (P2 + Q2) with P0 = group 0, Q0 = group 2, ...
-    let mut t = [gx[0] as f32 + gx[2] as f32, gy[0] as f32 + gy[2] as f32, gx[1] as f32 + gx[3] as f32, gy[1] as f32 + gy[3] as f32];
+    let mut t = [
+        gx[0] as f32 + gx[2] as f32,
+        gy[0] as f32 + gy[2] as f32,
+        gx[1] as f32 + gx[3] as f32,
+        gy[1] as f32 + gy[3] as f32,
+    ];
     let (lanes_x, lanes_y) = (bx.groups_exact(), by.groups_exact());
     if !(lanes_x && lanes_y) {
         let r = lanes_replay(p);
