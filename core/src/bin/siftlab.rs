@@ -1,5 +1,11 @@
 //! `siftlab`: the lab's `run_odometry.py`, natively.
 
+/// The CLI is native only; a wasm32 build (`wasm-pack test` builds every
+/// target of the crate) gets an empty program.
+#[cfg(target_arch = "wasm32")]
+fn main() {}
+
+#[cfg(not(target_arch = "wasm32"))]
 fn main() {
     in_huge_pages();
     keep_freed_memory();
@@ -15,6 +21,7 @@ fn main() {
 /// 0.8 s of system time over 99 frames. With the thresholds fixed high the
 /// run takes 33,000 faults, all in its first frames; peak memory is the
 /// same, as every freed block is reused by the next frame.
+#[cfg(not(target_arch = "wasm32"))]
 fn keep_freed_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
@@ -54,6 +61,7 @@ fn keep_freed_memory() {
 /// binary with `glibc.malloc.hugetlb=0` against it). The tunable is read
 /// only at start-up, hence the `exec` (about a millisecond); if it fails,
 /// the program simply goes on as it is.
+#[cfg(not(target_arch = "wasm32"))]
 fn in_huge_pages() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     {
