@@ -9,6 +9,8 @@
 pub mod client;
 pub mod components;
 pub mod exercise;
+pub mod frameset;
+pub mod lab_manual;
 pub mod loading;
 pub mod msg;
 pub mod pylit;

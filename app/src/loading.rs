@@ -3,6 +3,7 @@
 //! picker). Failures become an inline message; what was loaded stays.
 
 use crate::client::{self, FrameData};
+use crate::frameset::{first_pair, has_pair, missing_pair_message};
 use crate::state::{Job, Lab, Source, Which};
 use crate::worker::now_ms;
 use leptos::prelude::*;
@@ -164,30 +165,27 @@ pub fn load_pair(lab: Lab, frame_id: u32) {
 /// `fresh`: the source just changed, so frames with the same names are not the same frames.
 fn load_pair_from(lab: Lab, frame_id: u32, fresh: bool) {
     let source = lab.source.get_untracked();
-    if frame_id < 1 {
-        lab.load_error.set(Some("FRAME_ID must be at least 1: frames FRAME_ID-1 and FRAME_ID are matched".into()));
+    let where_ = match source {
+        Source::Demo(_) => "the demo",
+        _ => "the folder",
+    };
+    if let Some(message) = missing_pair_message(where_, source.frames(), frame_id) {
+        lab.load_error.set(Some(message));
         return;
     }
-    let missing: Vec<String> = [frame_id - 1, frame_id]
-        .iter()
-        .filter(|id| !source.frames().contains(id))
-        .map(|&id| frame_path(id))
-        .collect();
-    if !missing.is_empty() {
-        let where_ = match source {
-            Source::Demo(_) => "the demo",
-            _ => "the folder",
-        };
-        lab.load_error.set(Some(format!("{} missing from {where_}: cannot match FRAME_ID {frame_id}", missing.join(" and "))));
-        return;
-    }
-    let showing = |w: Which, id: u32| lab.frame(w).with_untracked(|f| f.as_ref().is_some_and(|f| f.label == frame_path(id)));
+    let showing =
+        |w: Which, id: u32| lab.frame(w).with_untracked(|f| f.as_ref().is_some_and(|f| f.label == frame_path(id)));
     let pending = lab.jobs.with_untracked(|j| j.iter().any(|j| j.what.ends_with(&frame_path(frame_id))));
-    if !fresh && lab.frame_id.get_untracked() == frame_id && (pending || (showing(Which::Prev, frame_id - 1) && showing(Which::Cur, frame_id))) {
+    if !fresh
+        && lab.frame_id.get_untracked() == frame_id
+        && (pending || (showing(Which::Prev, frame_id - 1) && showing(Which::Cur, frame_id)))
+    {
         // Already shown or on its way (e.g. a second event for the same FRAME_ID).
         return;
     }
     lab.frame_id.set(frame_id);
+    // A pair that is there settles an earlier message about one that was not.
+    lab.load_error.set(None);
     for (which, id) in [(Which::Prev, frame_id - 1), (Which::Cur, frame_id)] {
         let g = bump(lab, which);
         let path = frame_path(id);
@@ -211,7 +209,9 @@ fn load_pair_from(lab: Lab, frame_id: u32, fresh: bool) {
 }
 
 /// The demo: `demo/index.txt` lists the frame ids, `demo/ATTRIBUTION.txt` says
-/// where they come from (shown next to the button).
+/// where they come from (shown next to the button). Only these two small files
+/// are fetched here; a frame is fetched when a pair or the odometry needs it,
+/// so the bundled frames cost nothing until then.
 pub fn load_demo(lab: Lab, frame_id: Option<u32>) {
     leptos::task::spawn_local(async move {
         let job = start_job(lab, "demo".into(), "reading the demo index");
@@ -227,11 +227,17 @@ pub fn load_demo(lab: Lab, frame_id: Option<u32>) {
                 return;
             }
         };
-        if ids.len() < 2 {
-            lab.load_error.set(Some("the demo needs at least two frames".into()));
+        let Some(first) = first_pair(&ids) else {
+            lab.load_error.set(Some("the demo needs two consecutive frames".into()));
             return;
+        };
+        let fid = frame_id.unwrap_or(first);
+        if !has_pair(&ids, fid) && lab.cur.with_untracked(Option::is_none) {
+            // A link to a pair the demo lacks: nothing is loaded (another pair's
+            // result under the link's settings would read as its answer), the
+            // FRAME_ID box shows what was asked, and the message below says why.
+            lab.frame_id.set(fid);
         }
-        let fid = frame_id.filter(|f| ids.contains(f) && ids.contains(&(f.wrapping_sub(1)))).unwrap_or(ids[1]);
         lab.source.set(Source::Demo(ids));
         load_pair_from(lab, fid, true);
     });
@@ -273,7 +279,7 @@ pub fn open_folder(lab: Lab, files: web_sys::FileList, frame_id: Option<u32>) {
     FOLDER_POSES.with(|p| *p.borrow_mut() = poses);
     // A folder in the right layout settles any earlier loading error.
     lab.load_error.set(None);
-    let fid = frame_id.unwrap_or_else(|| ids.iter().copied().find(|&i| i >= 1 && ids.contains(&(i - 1))).unwrap_or(1));
+    let fid = frame_id.or_else(|| first_pair(&ids)).unwrap_or(1);
     lab.source.set(Source::Folder(ids));
     load_pair_from(lab, fid, true);
 }
@@ -290,10 +296,15 @@ pub fn reanalyse(lab: Lab) {
 }
 
 /// Frames 0..n and the ground-truth poses of the current source, for the
-/// odometry view (the lab's `view_trajectory` starts at frame 0).
+/// odometry view (the lab's `view_trajectory FRAME_ID` runs frames 0 … FRAME_ID,
+/// so n = FRAME_ID + 1).
 pub async fn vo_inputs(source: &Source, n: u32) -> Result<(Vec<Vec<u8>>, String), String> {
     if let Some(missing) = (0..n).find(|i| !source.frames().contains(i)) {
-        return Err(format!("{} is missing: the odometry needs frames 0 … {}", frame_path(missing), n.saturating_sub(1)));
+        return Err(format!(
+            "{} is missing: the odometry needs frames 0 … {}",
+            frame_path(missing),
+            n.saturating_sub(1)
+        ));
     }
     let mut frames = Vec::with_capacity(n as usize);
     let poses = match source {

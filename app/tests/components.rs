@@ -1,17 +1,19 @@
 //! Component tests in headless Chromium (wasm-bindgen-test): the explorer
-//! mounted on OpenCV's own SIFT output for the demo frames
-//! (`tests/fixtures/golden/ipp/*.sift`) must show exactly what OpenCV's lab
-//! code printed for the same settings (`tests/fixtures/golden/get_info.jsonl`),
-//! and the controls, click-to-select, keyboard, errors, URL state and
-//! self-check must behave. SIFT itself is not run here (the core's wasm tests
-//! check it against the same goldens); the e2e test runs the real worker.
+//! mounted on OpenCV's own SIFT output for the bundled KITTI frames
+//! (`tests/fixtures/golden-avx2/ipp/*.sift`, OpenCV 8 lanes wide as the app
+//! runs by default) must show exactly what OpenCV's lab code printed for the
+//! same settings (`tests/fixtures/golden-avx2/get_info.jsonl`), and the
+//! controls, click-to-select, keyboard, errors, URL state, self-check and the
+//! odometry's frame control must behave. SIFT itself is not run here (the
+//! core's wasm tests check it against the same goldens; `manual.rs` runs it for
+//! the lab manual's examples); the e2e test runs the real worker.
 #![cfg(target_arch = "wasm32")]
 
 use leptos::prelude::*;
 use siftlab_app::client::FrameData;
-use siftlab_app::components::{apply_url, url_state, Explorer};
+use siftlab_app::components::{apply_url, url_state, Explorer, DEMO_FEATURE};
 use siftlab_app::msg::{FromWorker, SiftResult, ToWorker};
-use siftlab_app::state::{nearest_keypoint, Lab, Source};
+use siftlab_app::state::{analyse, nearest_keypoint, Lab, Source};
 use siftlab_app::urlstate::UrlState;
 use siftlab_core::sift::{Features, KeyPoint};
 use std::sync::Arc;
@@ -20,19 +22,32 @@ use wasm_bindgen_test::*;
 
 wasm_bindgen_test_configure!(run_in_browser);
 
-const GOLDEN: [&[u8]; 6] = [
-    include_bytes!("../../tests/fixtures/golden/ipp/000000.sift"),
-    include_bytes!("../../tests/fixtures/golden/ipp/000001.sift"),
-    include_bytes!("../../tests/fixtures/golden/ipp/000002.sift"),
-    include_bytes!("../../tests/fixtures/golden/ipp/000003.sift"),
-    include_bytes!("../../tests/fixtures/golden/ipp/000004.sift"),
-    include_bytes!("../../tests/fixtures/golden/ipp/000005.sift"),
-];
-const GET_INFO: &str = include_str!("../../tests/fixtures/golden/get_info.jsonl");
+/// The frames the goldens cover: 0–5 and the lab manual's pairs.
+fn golden_bytes(id: usize) -> &'static [u8] {
+    match id {
+        0 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000000.sift"),
+        1 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000001.sift"),
+        2 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000002.sift"),
+        3 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000003.sift"),
+        4 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000004.sift"),
+        5 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000005.sift"),
+        119 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000119.sift"),
+        120 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000120.sift"),
+        149 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000149.sift"),
+        150 => include_bytes!("../../tests/fixtures/golden-avx2/ipp/000150.sift"),
+        _ => panic!("no golden for frame {id}"),
+    }
+}
+const GET_INFO: &str = include_str!("../../tests/fixtures/golden-avx2/get_info.jsonl");
+
+/// The frame ids of the bundled demo (`www/demo/MyKITTI`).
+fn demo_ids() -> Vec<u32> {
+    (0..100).chain([119, 120, 149, 150]).collect()
+}
 
 /// Reads a `SIFTGLD1` file (format in tests/fixtures/README.md).
 fn golden(i: usize) -> (usize, usize, Features) {
-    let b = GOLDEN[i];
+    let b = golden_bytes(i);
     assert_eq!(&b[..8], b"SIFTGLD1");
     let u = |o: usize| u32::from_le_bytes(b[o..o + 4].try_into().unwrap());
     let (w, h, n) = (u(8) as usize, u(12) as usize, u(16) as usize);
@@ -137,11 +152,14 @@ fn set_value(root: &web_sys::HtmlElement, testid: &str, value: &str, event: &str
     } else if let Some(t) = el.dyn_ref::<web_sys::HtmlTextAreaElement>() {
         t.set_value(value);
     }
-    el.dispatch_event(&web_sys::Event::new_with_event_init_dict(event, &{
-        let i = web_sys::EventInit::new();
-        i.set_bubbles(true);
-        i
-    }).unwrap())
+    el.dispatch_event(
+        &web_sys::Event::new_with_event_init_dict(event, &{
+            let i = web_sys::EventInit::new();
+            i.set_bubbles(true);
+            i
+        })
+        .unwrap(),
+    )
     .unwrap();
 }
 
@@ -149,7 +167,7 @@ fn loaded_lab(cur: usize) -> Lab {
     let lab = Lab::new();
     lab.prev.set(Some(frame(cur - 1)));
     lab.cur.set(Some(frame(cur)));
-    lab.source.set(Source::Demo((0..6).collect()));
+    lab.source.set(Source::Demo(demo_ids()));
     lab.frame_id.set(cur as u32);
     lab
 }
@@ -157,12 +175,12 @@ fn loaded_lab(cur: usize) -> Lab {
 #[wasm_bindgen_test]
 async fn tuples_equal_opencv_lab_output_for_every_golden_draw() {
     let all = draws();
-    assert!(all.len() >= 300, "{} draws", all.len());
+    assert!(all.len() >= 400, "{} draws", all.len());
     let lab = loaded_lab(1);
     let root = mount(lab);
     let mut checked = 0;
     let mut wrong = Vec::new();
-    for cur in 1..=5 {
+    for cur in [1, 2, 3, 4, 5, 120, 150] {
         lab.prev.set(Some(frame(cur - 1)));
         lab.cur.set(Some(frame(cur)));
         for d in all.iter().filter(|d| d.frame == cur) {
@@ -173,13 +191,21 @@ async fn tuples_equal_opencv_lab_output_for_every_golden_draw() {
             leptos::task::tick().await;
             let got = text(&root, "result-tuple");
             if got != d.ret {
-                wrong.push(format!("get_info -a {} -t {:?} {cur} {}:\n  app:    {got}\n  OpenCV: {}", d.algo, d.threshold, d.feature, d.ret));
+                wrong.push(format!(
+                    "get_info -a {} -t {:?} {cur} {}:\n  app:    {got}\n  OpenCV: {}",
+                    d.algo, d.threshold, d.feature, d.ret
+                ));
             }
             checked += 1;
         }
     }
     assert_eq!(checked, all.len());
-    assert!(wrong.is_empty(), "{} of {checked} draws differ; first: {}", wrong.len(), wrong.iter().take(2).cloned().collect::<Vec<_>>().join("\n"));
+    assert!(
+        wrong.is_empty(),
+        "{} of {checked} draws differ; first: {}",
+        wrong.len(),
+        wrong.iter().take(2).cloned().collect::<Vec<_>>().join("\n")
+    );
 }
 
 #[wasm_bindgen_test]
@@ -268,11 +294,15 @@ async fn click_selects_the_nearest_keypoint_and_arrows_step() {
     let stage: web_sys::HtmlElement = root.query_selector(".stage").unwrap().unwrap().unchecked_into();
     stage.focus().unwrap();
     lab.set_feature(10);
-    for (key, want) in [("ArrowRight", 11), ("ArrowLeft", 10), ("PageDown", 20), ("End", prev.keypoints.len() - 1), ("Home", 0)] {
+    for (key, want) in
+        [("ArrowRight", 11), ("ArrowLeft", 10), ("PageDown", 20), ("End", prev.keypoints.len() - 1), ("Home", 0)]
+    {
         let init = web_sys::KeyboardEventInit::new();
         init.set_key(key);
         init.set_bubbles(true);
-        stage.dispatch_event(&web_sys::KeyboardEvent::new_with_keyboard_event_init_dict("keydown", &init).unwrap()).unwrap();
+        stage
+            .dispatch_event(&web_sys::KeyboardEvent::new_with_keyboard_event_init_dict("keydown", &init).unwrap())
+            .unwrap();
         leptos::task::tick().await;
         assert_eq!(lab.feature_text.get_untracked(), want.to_string(), "{key}");
     }
@@ -328,12 +358,24 @@ async fn url_state_round_trips_through_a_fresh_lab() {
 #[wasm_bindgen_test]
 fn worker_messages_round_trip_bit_for_bit() {
     let (w, h, features) = golden(2);
-    let result = SiftResult { width: w, height: h, gray: vec![7; w * h], features, decode_ms: 1.5, sift_ms: 250.0, engine: "SIMD128: exact multiply-add emulation".into() };
+    let result = SiftResult {
+        width: w,
+        height: h,
+        gray: vec![7; w * h],
+        features,
+        decode_ms: 1.5,
+        sift_ms: 250.0,
+        engine: "SIMD128: exact multiply-add emulation".into(),
+    };
     let m = FromWorker::Done { id: 3, result };
     assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
     let s = ToWorker::Sift { id: 4, bytes: vec![1, 2, 3], lanes: 16 };
     assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
-    for m in [FromWorker::Ready, FromWorker::Progress { id: 1, stage: "x".into() }, FromWorker::Failed { id: 2, message: "m".into() }] {
+    for m in [
+        FromWorker::Ready,
+        FromWorker::Progress { id: 1, stage: "x".into() },
+        FromWorker::Failed { id: 2, message: "m".into() },
+    ] {
         assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
     }
     assert!(FromWorker::from_js(&wasm_bindgen::JsValue::from_str("junk")).is_err());
@@ -344,8 +386,24 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
     let v = ToWorker::Vo { id: 5, frames: vec![vec![1, 2], vec![3]], poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
     assert_eq!(ToWorker::from_js(&v.to_js()).unwrap(), v);
     for m in [
-        FromWorker::VoStep { id: 5, frame: 2, total: 6, position: [0.5, -0.25, 1.75], truth: Some([0.0, 0.0, 2.0]), tracked: 1400, redetected: true },
-        FromWorker::VoStep { id: 5, frame: 0, total: 6, position: [0.0; 3], truth: None, tracked: 0, redetected: false },
+        FromWorker::VoStep {
+            id: 5,
+            frame: 2,
+            total: 6,
+            position: [0.5, -0.25, 1.75],
+            truth: Some([0.0, 0.0, 2.0]),
+            tracked: 1400,
+            redetected: true,
+        },
+        FromWorker::VoStep {
+            id: 5,
+            frame: 0,
+            total: 6,
+            position: [0.0; 3],
+            truth: None,
+            tracked: 0,
+            redetected: false,
+        },
         FromWorker::VoDone { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5 },
     ] {
         assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
@@ -372,18 +430,18 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
 /// time with keypoints detected ahead by helper workers) gives exactly what the
 /// one-worker loop gives: every step's positions and counts, the trajectory error
 /// and the PNG. Both are run here through the worker's message handler, on four of
-/// the fixture frames; the e2e test compares the page with the CLI.
+/// the bundled KITTI frames; the e2e test compares the page with the CLI.
 #[wasm_bindgen_test]
 fn streamed_odometry_equals_the_one_worker_loop() {
     let frames: Vec<Vec<u8>> = (0..4)
         .map(|i| match i {
-            0 => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000000.png").to_vec(),
-            1 => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000001.png").to_vec(),
-            2 => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000002.png").to_vec(),
-            _ => include_bytes!("../../tests/fixtures/mykitti/gray/00/image_0/000003.png").to_vec(),
+            0 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000000.png").to_vec(),
+            1 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000001.png").to_vec(),
+            2 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000002.png").to_vec(),
+            _ => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000003.png").to_vec(),
         })
         .collect();
-    let poses = include_str!("../../tests/fixtures/mykitti/poses/00.txt");
+    let poses = include_str!("../../www/demo/MyKITTI/poses/00.txt");
     let handle = |m: ToWorker| {
         let got = std::cell::RefCell::new(Vec::new());
         siftlab_app::worker::handle(m, &|m| got.borrow_mut().push(m));
@@ -393,8 +451,10 @@ fn streamed_odometry_equals_the_one_worker_loop() {
         FromWorker::VoDone { id, ate, png, .. } => FromWorker::VoDone { id, ate, png, ms: 0.0 },
         m => m,
     };
-    let one_worker: Vec<FromWorker> =
-        handle(ToWorker::Vo { id: 7, frames: frames.clone(), poses: poses.into() }).into_iter().map(without_time).collect();
+    let one_worker: Vec<FromWorker> = handle(ToWorker::Vo { id: 7, frames: frames.clone(), poses: poses.into() })
+        .into_iter()
+        .map(without_time)
+        .collect();
     assert_eq!(one_worker.len(), 5, "{one_worker:?}");
     assert!(matches!(one_worker[4], FromWorker::VoDone { .. }));
 
@@ -430,4 +490,58 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     let got = handle(ToWorker::Detect { frame: 3, bytes: b"nope".to_vec() });
     let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.starts_with("frame 3: not an image"), "{message}");
+}
+
+/// The demo opens on `DEMO_FEATURE` under nndr 0.8: on OpenCV's own keypoints of
+/// frames 0 and 1 it is a large keypoint near the middle of frame 0, and it has a
+/// match (so the first view shows a circle, a line and a distance).
+#[wasm_bindgen_test]
+fn the_demo_feature_is_large_central_and_matched() {
+    let (w, h, kps) = golden(0);
+    let k = kps.keypoints[DEMO_FEATURE];
+    assert!(k.size > 30.0, "size {}", k.size);
+    assert!((k.x as f64 - w as f64 / 2.0).abs() < w as f64 / 10.0, "x {}", k.x);
+    assert!((k.y as f64 - h as f64 / 2.0).abs() < h as f64 / 4.0, "y {}", k.y);
+    let a = analyse(&frame(0), &frame(1), "nndr", "0.8", &DEMO_FEATURE.to_string()).unwrap();
+    assert_eq!(a.explanation.matches.len(), 1, "{}", a.tuple);
+    // What OpenCV's lab code prints for it (the golden draw of the same settings, if drawn).
+    if let Some(d) = draws()
+        .into_iter()
+        .find(|d| d.frame == 1 && d.feature == DEMO_FEATURE && d.algo == "nndr" && d.threshold == "0.8")
+    {
+        assert_eq!(a.tuple, d.ret);
+    }
+    // A link without a feature opens on it; one with a feature keeps its own.
+    let lab = Lab::new();
+    apply_url(lab, &UrlState::from_query("?src=folder"));
+    assert_eq!(lab.feature(), Some(0));
+    let lab = Lab::new();
+    apply_url(lab, &UrlState::from_query("?src=demo&feature=7"));
+    assert_eq!(lab.feature(), Some(7));
+    let lab = Lab::new();
+    apply_url(lab, &UrlState::from_query(""));
+    assert_eq!(lab.feature(), Some(DEMO_FEATURE));
+}
+
+/// The odometry's control counts as the lab's `view_trajectory FRAME_ID`: the
+/// demo offers frames 0 … 99 (its 119, 120, 149, 150 are not in the run), and a
+/// FRAME_ID past the run is refused with the reason, before any frame is read.
+#[wasm_bindgen_test]
+async fn the_odometry_control_counts_frames_as_the_lab() {
+    let lab = loaded_lab(1);
+    let root = mount(lab);
+    leptos::task::tick().await;
+    let input: web_sys::HtmlInputElement = q(&root, "vo-frame-id").unwrap().unchecked_into();
+    assert_eq!(input.value(), "99");
+    assert_eq!(text(&root, "vo-range"), "frames 0 to 99 (100 frames) · available: frames 0 to 99");
+    set_value(&root, "vo-frame-id", "4", "input");
+    leptos::task::tick().await;
+    assert!(text(&root, "vo-range").starts_with("frames 0 to 4 (5 frames)"), "{}", text(&root, "vo-range"));
+    set_value(&root, "vo-frame-id", "120", "input");
+    q(&root, "vo-run").unwrap().click();
+    leptos::task::tick().await;
+    assert_eq!(
+        text(&root, "vo-error"),
+        "FRAME_ID 120 needs frames 0 to 120 (121 frames), but the frames in a row from 0 are frames 0 to 99 (100 frames)"
+    );
 }

@@ -4,7 +4,7 @@
 // (target/release/siftlab) on the same frames.
 import { test, before, after, beforeEach, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
-import { execFileSync } from 'node:child_process';
+import { execFileSync, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -15,8 +15,9 @@ const HERE = path.dirname(fileURLToPath(import.meta.url));
 const ROOT = path.resolve(HERE, '../..');
 const BASE = process.env.BASE_URL || 'http://127.0.0.1:8080/';
 const ORIGIN = new URL(BASE).origin;
-const CLI = path.join(ROOT, 'target/release/siftlab');
-const DATASET = 'tests/fixtures/mykitti';
+// tests/e2e/run.sh passes the CLI it built (CARGO_TARGET_DIR honoured).
+const CLI = process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab');
+const DATASET = 'www/demo/MyKITTI';
 const FRAME = (id) => path.join(ROOT, DATASET, 'gray/00/image_0', String(id).padStart(6, '0') + '.png');
 const SHOTS = path.join(HERE, 'screenshots');
 fs.mkdirSync(SHOTS, { recursive: true });
@@ -112,7 +113,7 @@ test('demo: counts and nndr 0.8 tuples equal the native CLI; URL restores the vi
   metrics.demoReadyMs = Date.now() - t0;
   // The opening view shows a match: the demo's own feature under nndr 0.8.
   const opening = await page.inputValue(tid('feature'));
-  assert.equal(opening, '455');
+  assert.equal(opening, '1256');
   assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', opening]));
   assert.notEqual(await tuple(), '((0, 0), [], [])');
   const sift = [0, 1].map((id) => cliSift(id));
@@ -189,6 +190,104 @@ test('default view (AVX2 build) equals the CLI with --opencv-lanes 8', async () 
       .split('\n').find((l) => l.startsWith('ret value: ')).slice(11);
     assert.equal(await tuple(), want);
   }
+});
+
+// The app's default width (8 lanes, AVX2), whatever the host: what the lab manual's
+// examples and a plain link are computed with.
+function cliRet8(args) {
+  const out = execFileSync(CLI, ['--opencv-lanes', '8', '-d', DATASET, 'get_info', ...args], { cwd: ROOT, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+  return out.split('\n').find((l) => l.startsWith('ret value: ')).slice('ret value: '.length);
+}
+
+test('the page opens on real KITTI frames 0/1, fetching only those two frames, with the attribution', async () => {
+  const fetched = [];
+  page.on('request', (r) => { if (/\/demo\//.test(r.url())) fetched.push(new URL(r.url()).pathname); });
+  await page.goto(BASE);
+  await idle();
+  assert.match(await page.textContent('.slots'), /000000\.png[\s\S]*000001\.png/);
+  const sift = [0, 1].map((id) => cliSift(id, 8));
+  assert.equal(await page.textContent(tid('keypoint-count-prev')), String(sift[0].keypoints.length));
+  assert.equal(await page.inputValue(tid('feature')), '1256');
+  assert.equal(await tuple(), cliRet8(['-a', 'nndr', '-t', '0.8', '1', '1256']));
+  assert.notEqual(await tuple(), '((0, 0), [], [])');
+  // Frames load lazily: of the 104 bundled frames, the page fetched the pair it shows.
+  const frames = fetched.filter((u) => u.endsWith('.png')).sort();
+  assert.deepEqual(frames, ['/demo/gray/00/image_0/000000.png', '/demo/gray/00/image_0/000001.png']);
+  assert.ok(fetched.includes('/demo/index.txt'));
+  // KITTI's attribution and licence beside the demo, and the README with them in full.
+  const attribution = await page.textContent(tid('attribution'));
+  assert.match(attribution, /KITTI odometry sequence 00/);
+  assert.match(attribution, /Geiger, P\. Lenz, R\. Urtasun/);
+  assert.match(attribution, /CC BY-NC-SA 3\.0/);
+  const readme = await page.evaluate(async () => (await fetch('demo/README.md')).text());
+  assert.match(readme, /Creative Commons Attribution-NonCommercial-ShareAlike 3\.0/);
+  assert.equal(await page.evaluate(async () => (await fetch('demo/poses/00.txt')).text()),
+    fs.readFileSync(path.join(ROOT, DATASET, 'poses/00.txt'), 'utf8'));
+  await page.screenshot({ path: path.join(SHOTS, 'opening.png'), fullPage: true });
+});
+
+test('lab manual examples: each click shows the manual value beside siftlab\'s, equal (✓)', async () => {
+  await page.goto(BASE);
+  await idle();
+  const buttons = await page.$$('[data-testid^="manual-example-"]');
+  assert.equal(buttons.length, 7);
+  for (let i = 0; i < 7; i++) {
+    const label = await page.textContent(tid(`manual-example-${i}`));
+    const m = label.match(/get_info -a (\S+)(?: -t (\S+))? (\d+) (\d+)/);
+    assert.ok(m, label);
+    const [, algo, t, frame, feature] = m;
+    await page.click(tid(`manual-example-${i}`));
+    // The example's own pair on screen, and its comparison filled in.
+    await page.waitForFunction(([cmd]) => {
+      const c = document.querySelector('[data-testid="manual-compare"]');
+      return c && c.textContent.includes(cmd) && document.querySelector('[data-testid="manual-mark"]');
+    }, [m[0]], { timeout: 180000 });
+    await idle();
+    const want = cliRet8(['-a', algo, ...(t ? ['-t', t] : []), frame, feature]);
+    assert.equal(await page.inputValue(tid('feature')), feature);
+    assert.equal(await page.inputValue(tid('threshold')), t || '');
+    assert.equal(await page.inputValue(tid('frame-id')), frame);
+    assert.equal(await tuple(), want, m[0]);
+    assert.equal((await page.textContent(tid('manual-got'))).trim(), want);
+    assert.equal((await page.textContent(tid('manual-expected'))).trim(), want, `the manual's value for ${m[0]}`);
+    assert.match(await page.textContent(tid('manual-mark')), /^✓/);
+    assert.match(await page.getAttribute(tid(`manual-example-${i}`), 'class'), /active/);
+    if (i === 1) await page.screenshot({ path: path.join(SHOTS, 'manual-example.png'), fullPage: true });
+  }
+});
+
+test('a link to the manual\'s Task 1 tuple opens on it, with the comparison', async () => {
+  await page.goto(`${BASE}?src=demo&frame=150&feature=209&algo=dt&t=300`);
+  await idle();
+  assert.match(await page.textContent('.slots'), /000149\.png[\s\S]*000150\.png/);
+  const want = cliRet8(['-a', 'dt', '-t', '300', '150', '209']);
+  assert.equal(await tuple(), want);
+  assert.equal((await page.textContent(tid('manual-expected'))).trim(), want);
+  assert.match(await page.textContent(tid('manual-mark')), /^✓/);
+  assert.match(await page.textContent(tid('manual-compare')), /Task 1 \(dt\)/);
+  assert.match(page.url(), /\?src=demo&frame=150&feature=209&algo=dt&t=300$/);
+});
+
+test('a link to frames the demo lacks says which, and the app stays usable', async () => {
+  await page.goto(`${BASE}?src=demo&frame=130&feature=5`);
+  await page.waitForSelector(tid('error'));
+  assert.match(await page.textContent(tid('error')),
+    /FRAME_ID 130 needs frames 129 and 130: frames 129 and 130 are not in the demo, which has frames 0–99, 119, 120, 149, 150/);
+  // Nothing else is shown under the link's settings, and the link stays as it was.
+  assert.equal(await page.$(tid('keypoint-count-cur')), null);
+  assert.equal(await page.inputValue(tid('frame-id')), '130');
+  assert.match(page.url(), /frame=130/);
+  await page.screenshot({ path: path.join(SHOTS, 'missing-frame.png') });
+  // One of the two missing.
+  await page.goto(`${BASE}?src=demo&frame=119`);
+  await page.waitForSelector(tid('error'));
+  assert.match(await page.textContent(tid('error')), /FRAME_ID 119 needs frames 118 and 119: frame 118 is not in the demo, which has frames 0–99, 119, 120, 149, 150/);
+  // Usable: a FRAME_ID the demo has loads, and the message goes.
+  await page.fill(tid('frame-id'), '120');
+  await page.press(tid('frame-id'), 'Enter');
+  await idle();
+  assert.equal(await page.$(tid('error')), null);
+  assert.equal(await tuple(), cliRet8(['-a', 'nndr', '-t', '0.8', '120', await page.inputValue(tid('feature'))]));
 });
 
 test('click-to-select picks the keypoint under the cursor', async () => {
@@ -278,14 +377,16 @@ test('bad files and folders show an inline error and keep what was loaded', asyn
   await page.waitForSelector(tid('error'), { state: 'detached' });
   await idle();
   assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', '42']));
-  await page.fill(tid('frame-id'), '9');
+  await page.fill(tid('frame-id'), '130');
   await page.press(tid('frame-id'), 'Enter');
-  await page.waitForFunction((sel) => /000008\.png and gray\/00\/image_0\/000009\.png missing/.test(document.querySelector(sel)?.textContent || ''), tid('error'));
+  await page.waitForFunction((sel) => (document.querySelector(sel)?.textContent || '').includes(
+    'FRAME_ID 130 needs frames 129 and 130: frames 129 and 130 are not in the folder, which has frames 0–99, 119, 120, 149, 150'), tid('error'));
   await page.fill(tid('frame-id'), '3');
   await page.press(tid('frame-id'), 'Enter');
   await page.waitForFunction(() => /000003\.png/.test(document.querySelector('.slots')?.textContent || ''));
   await idle();
   assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '3', '42']));
+  assert.equal(await page.$(tid('error')), null, 'a pair that is there settles the message');
   // And a good file after the bad ones: the app still works.
   await page.setInputFiles(tid('frame-cur'), FRAME(5));
   await page.waitForFunction((sel) => /000005\.png/.test(document.querySelector(sel)?.textContent || ''), '.slots');
@@ -338,18 +439,27 @@ test('narrow screen layout', async () => {
   await page.screenshot({ path: path.join(SHOTS, 'narrow.png'), fullPage: true });
 });
 
-test('visual odometry on the demo frames equals the CLI view_trajectory', async () => {
+test('visual odometry on the bundled frames 0 to 99 equals the CLI view_trajectory 99', async () => {
   await page.goto(`${BASE}?lanes=${LANES}`);
   await idle();
-  const n = fs.readdirSync(path.join(ROOT, DATASET, 'gray/00/image_0')).filter((f) => /^\d{6}\.png$/.test(f)).length;
-  assert.equal(await page.inputValue(tid('vo-frames')), String(n));
+  // The lab's count: view_trajectory FRAME_ID runs frames 0 … FRAME_ID; the demo's
+  // contiguous run from 0 is 0–99 (its 119, 120, 149, 150 are not part of it).
+  const ids = fs.readdirSync(path.join(ROOT, DATASET, 'gray/00/image_0')).filter((f) => /^\d{6}\.png$/.test(f)).map((f) => Number(f.slice(0, 6)));
+  let last = 0;
+  while (ids.includes(last + 1)) last++;
+  assert.equal(last, 99);
+  assert.equal(await page.inputValue(tid('vo-frame-id')), String(last));
+  assert.equal(await page.textContent(tid('vo-range')), `frames 0 to ${last} (${last + 1} frames) · available: frames 0 to ${last}`);
   await page.click(tid('vo-run'));
-  await page.waitForSelector(tid('vo-ate'), { timeout: 300000 });
+  await page.waitForSelector(tid('vo-ate'), { timeout: 600000 });
   const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-'));
-  const out = execFileSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', String(n)], { cwd: tmp, encoding: 'utf8' });
-  const ate = out.match(/trajectory error \(ATE RMSE, \d+ frames\): ([\d.]+) m/)[1];
-  assert.equal(await page.textContent(tid('vo-ate')), `${ate} m`);
-  assert.match(await page.textContent(tid('vo-progress')), new RegExp(`frame ${n} / ${n}`));
+  // The CLI reports the trajectory error with its progress (stdout or stderr: read both).
+  const vo = spawnSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', String(last)], { cwd: tmp, encoding: 'utf8' });
+  assert.equal(vo.status, 0, vo.stderr);
+  const ate = (vo.stdout + vo.stderr).match(/trajectory error \(ATE RMSE, (\d+) frames\): ([\d.]+) m/);
+  assert.equal(ate[1], String(last + 1));
+  assert.equal(await page.textContent(tid('vo-ate')), `${ate[2]} m`);
+  assert.match(await page.textContent(tid('vo-progress')), new RegExp(`frame ${last + 1} / ${last + 1}`));
   metrics.voChromium = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
   // The lab's window as a PNG: the same bytes the CLI writes.
   const [download] = await Promise.all([page.waitForEvent('download'), page.click(tid('vo-download'))]);
@@ -357,15 +467,22 @@ test('visual odometry on the demo frames equals the CLI view_trajectory', async 
   assert.ok(png.equals(fs.readFileSync(path.join(tmp, 'trajectory.png'))), 'trajectory.png differs from the CLI');
   await page.locator('.trajectory').screenshot({ path: path.join(SHOTS, 'trajectory.png') });
   fs.rmSync(tmp, { recursive: true });
+  // Past the run: refused with the reason, nothing read.
+  await page.fill(tid('vo-frame-id'), '120');
+  await page.click(tid('vo-run'));
+  assert.match(await page.textContent(tid('vo-error')), /FRAME_ID 120 needs frames 0 to 120 \(121 frames\), but the frames in a row from 0 are frames 0 to 99/);
   // A broken frame 3 in a MyKITTI folder: the detection helpers leave it to the
   // tracker, which fails on it in frame order, after the steps before it, with
   // the one-worker loop's message.
   const broken = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-broken-'));
-  fs.cpSync(path.join(ROOT, DATASET), broken, { recursive: true });
+  fs.mkdirSync(path.join(broken, 'gray/00/image_0'), { recursive: true });
+  fs.cpSync(path.join(ROOT, DATASET, 'poses'), path.join(broken, 'poses'), { recursive: true });
+  for (let i = 0; i <= 5; i++) fs.copyFileSync(FRAME(i), path.join(broken, 'gray/00/image_0', path.basename(FRAME(i))));
   fs.writeFileSync(path.join(broken, 'gray/00/image_0/000003.png'), fs.readFileSync(FRAME(3)).subarray(0, 20000));
   await page.setInputFiles(tid('folder'), broken);
   await idle();
-  await page.fill(tid('vo-frames'), '5');
+  assert.equal(await page.inputValue(tid('vo-frame-id')), '5');
+  await page.fill(tid('vo-frame-id'), '4');
   await page.click(tid('vo-run'));
   await page.waitForSelector(tid('vo-error'), { timeout: 300000 });
   assert.match(await page.textContent(tid('vo-error')), /^frame 3: .*(corrupt|truncated)/);

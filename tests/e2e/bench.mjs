@@ -1,22 +1,25 @@
 // The app's speed in headless Chromium, both worker builds, against the native CLI, interleaved
-// in one run on the same frames (tests/fixtures/mykitti, frames 0-5):
+// in one run on the same frames (the bundled KITTI frames www/demo/MyKITTI, frames 0-5):
 // - SIFT (detect+compute) per frame, one frame at a time: the relaxed-SIMD worker (the default
 //   where relaxed SIMD validates), the SIMD128 worker (`?wasm=portable`), the CLI on all cores
 //   and on one core;
-// - the odometry view on the demo frames, each build in turn, `--vo-rounds` times.
+// - the odometry view on the demo frames (0-99), each build in turn, `--vo-rounds` times.
 //   BASE_URL=http://127.0.0.1:8080/ node tests/e2e/bench.mjs [--vo-rounds 2] [--vo-dataset DIR --vo-frames N]
-// (dist/ served, CLI built). --vo-dataset runs the odometry on N frames of a MyKITTI folder
-// (e.g. target/synthkitti, 100 frames) instead of the demo, and checks its trajectory error
-// against the CLI's view_trajectory on the same frames.
-import { execFileSync } from 'node:child_process';
+// (dist/ served, CLI built). --vo-dataset runs the odometry on a MyKITTI folder instead of
+// the demo; --vo-frames N runs N frames (frames 0 … N−1: the page's FRAME_ID is N−1, as
+// view_trajectory counts); the trajectory error is checked against the CLI's
+// view_trajectory on the same frames.
+import { execFileSync, spawnSync } from 'node:child_process';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { chromium } from 'playwright-core';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const BASE = process.env.BASE_URL || 'http://127.0.0.1:8080/';
-const CLI = path.join(ROOT, 'target/release/siftlab');
-const frame = (i) => path.join(ROOT, 'tests/fixtures/mykitti/gray/00/image_0', String(i).padStart(6, '0') + '.png');
+// tests/e2e/run.sh passes the CLI it built (CARGO_TARGET_DIR honoured).
+const CLI = process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab');
+const DEMO = path.join(ROOT, 'www/demo/MyKITTI');
+const frame = (i) => path.join(DEMO, 'gray/00/image_0', String(i).padStart(6, '0') + '.png');
 const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const arg = process.argv.indexOf('--vo-rounds');
 const voRounds = arg > 0 ? Number(process.argv[arg + 1]) : 2;
@@ -63,8 +66,8 @@ for (let r = 0; r < voRounds; r++) {
     if (voDataset) {
       await page.setInputFiles('[data-testid="folder"]', voDataset);
       await page.waitForSelector('[data-testid="busy"]', { state: 'detached', timeout: 300000 });
-      if (voFrames) await page.fill('[data-testid="vo-frames"]', voFrames);
     }
+    if (voFrames) await page.fill('[data-testid="vo-frame-id"]', String(Number(voFrames) - 1));
     await page.click('[data-testid="vo-run"]');
     await page.waitForSelector('[data-testid="vo-ate"]', { timeout: 1800000 });
     const m = (await page.textContent('.trajectory')).match(/over (\d+) frames · ([\d.]+) s/);
@@ -73,9 +76,11 @@ for (let r = 0; r < voRounds; r++) {
   }
 }
 await browser.close();
-// The CLI on the same frames: the page's trajectory error must be the same text.
+// The CLI on the same frames (view_trajectory FRAME_ID runs frames 0 … FRAME_ID): the
+// page's trajectory error must be the same text.
 const frames = vo.relaxed[0]?.frames;
-const cliOut = execFileSync(CLI, ['-d', voDataset || path.join(ROOT, 'tests/fixtures/mykitti'), 'view_trajectory', String(frames), '--output', '/dev/null'], { encoding: 'utf8', stdio: ['ignore', 'pipe', 'ignore'] });
+const cliRun = spawnSync(CLI, ['-d', voDataset || DEMO, 'view_trajectory', String(frames - 1), '--output', '/dev/null'], { encoding: 'utf8' });
+const cliOut = cliRun.stdout + cliRun.stderr; // the error is reported with the progress, on stderr
 const cliAte = `${cliOut.match(/trajectory error \(ATE RMSE, \d+ frames\): ([\d.]+) m/)[1]} m`;
 const r = {
   chromiumSiftMs: sift, nativeMs: native, nativeOneCoreMs: nativeOneThread,

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The app's end-to-end suite: Playwright (npm playwright-core) driving Debian's headless
 # Chromium against dist/ served on a free localhost port, checked against the native CLI.
-# Installs the npm package and builds what is missing (dist/, target/release/siftlab).
+# Installs the npm package and builds what is missing (dist/, target/release/siftlab or
+# $CARGO_TARGET_DIR/release/siftlab).
 # Screenshots and measured figures land in tests/e2e/screenshots/ (gitignored).
 set -euo pipefail
 
@@ -21,7 +22,12 @@ fi
 if [ ! -f dist/index.html ] || [ ! -f dist/pkg/siftlab_app_bg.wasm ]; then
     www/build
 fi
-if [ ! -x target/release/siftlab ]; then
+# The reference CLI, from the same target dir cargo builds into (CARGO_TARGET_DIR, if set,
+# keeps a second build off a concurrent one); the tests read its path from SIFTLAB_CLI.
+TARGET="${CARGO_TARGET_DIR:-target}"
+case "$TARGET" in /*) ;; *) TARGET="$ROOT/$TARGET" ;; esac
+export SIFTLAB_CLI="$TARGET/release/siftlab"
+if [ ! -x "$SIFTLAB_CLI" ]; then
     cargo build --release --bin siftlab
 fi
 

@@ -1,5 +1,7 @@
 //! Loading frames (demo, files, MyKITTI folder) and the progress / error strip.
 
+use super::ManualExamples;
+use crate::frameset::describe_ids;
 use crate::loading::{self, frame_path};
 use crate::state::{Lab, Source, Which};
 use crate::worker::now_ms;
@@ -92,10 +94,9 @@ pub fn Loader() -> impl IntoView {
     let has_frames = move || !lab.source.with(|s| s.frames().is_empty());
     let go = move || match frame_text.get_untracked().trim().parse::<u32>() {
         Ok(f) => loading::load_pair(lab, f),
-        Err(_) => lab.load_error.set(Some(format!(
-            "FRAME_ID {:?} is not a whole number ≥ 1",
-            frame_text.get_untracked().trim()
-        ))),
+        Err(_) => lab
+            .load_error
+            .set(Some(format!("FRAME_ID {:?} is not a whole number ≥ 1", frame_text.get_untracked().trim()))),
     };
     view! {
         <section class="card loader" aria-label="Load frames">
@@ -151,12 +152,7 @@ pub fn Loader() -> impl IntoView {
                                 )
                             }}
                             {move || lab.source.with(|s| match s {
-                                Source::Demo(ids) | Source::Folder(ids) => format!(
-                                    " · {} frames available ({}–{})",
-                                    ids.len(),
-                                    ids.first().copied().unwrap_or(0),
-                                    ids.last().copied().unwrap_or(0)
-                                ),
+                                Source::Demo(ids) | Source::Folder(ids) => format!(" · frames {}", describe_ids(ids)),
                                 Source::Files => String::new(),
                             })}
                         </span>
@@ -167,12 +163,18 @@ pub fn Loader() -> impl IntoView {
                 <FrameSlot which=Which::Prev testid="frame-prev"/>
                 <FrameSlot which=Which::Cur testid="frame-cur"/>
             </div>
+            <ManualExamples/>
             <Show when=move || matches!(lab.source.get(), Source::Demo(_))>
+                // KITTI's licence (CC BY-NC-SA 3.0) asks for the attribution wherever
+                // the frames are shown; the README beside them has it in full.
                 <p class="attribution" data-testid="attribution">
-                    {move || {
-                        let a = lab.attribution.get();
-                        if a.is_empty() { "Demo frames: see demo/README.md".to_string() } else { a }
-                    }}
+                    {move || lab.attribution.get()}
+                    " "
+                    <a href="demo/README.md" target="_blank" rel="noopener">"attribution and licence in full"</a>
+                    " · "
+                    <a href="https://creativecommons.org/licenses/by-nc-sa/3.0/" target="_blank" rel="noopener license">
+                        "the licence's text"
+                    </a>
                 </p>
             </Show>
         </section>
@@ -192,9 +194,7 @@ pub fn Status() -> impl IntoView {
         match (busy, handle, window) {
             (true, None, Some(w)) => {
                 let cb = wasm_bindgen::closure::Closure::<dyn FnMut()>::new(move || tick.update(|t| *t += 1));
-                let h = w
-                    .set_interval_with_callback_and_timeout_and_arguments_0(cb.as_ref().unchecked_ref(), 100)
-                    .ok();
+                let h = w.set_interval_with_callback_and_timeout_and_arguments_0(cb.as_ref().unchecked_ref(), 100).ok();
                 cb.forget();
                 h
             }

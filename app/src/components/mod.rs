@@ -6,6 +6,7 @@ mod controls;
 mod explain;
 mod frames;
 mod load;
+mod manual;
 mod result;
 mod trajectory;
 
@@ -14,6 +15,7 @@ pub use controls::Controls;
 pub use explain::{DescriptorGrid, DistanceChart, Explanation};
 pub use frames::FramesView;
 pub use load::{Loader, Status};
+pub use manual::{apply_example, current_example, ManualComparison, ManualExamples};
 pub use result::ResultPanel;
 pub use trajectory::TrajectoryView;
 
@@ -64,11 +66,16 @@ fn current_query() -> String {
     web_sys::window().and_then(|w| w.location().search().ok()).unwrap_or_default()
 }
 
-/// The feature the demo opens on: a large keypoint near the middle of frame 0
-/// whose nndr 0.8 match in frame 1 is the same corner 13 px further left, so
-/// the first view shows a match with its circle, line and distance. Feature 0
-/// (the strongest response) sits on the right edge and has no match there.
-pub const DEMO_FEATURE: usize = 455;
+/// The feature the demo opens on (KITTI 00, frames 0 → 1, nndr 0.8): the
+/// largest keypoint near the middle of frame 0 whose nndr 0.8 match in frame 1
+/// exists. It is 39.7 px across at (606.2, 116.5), at the far end of the street
+/// where the road vanishes — near the focus of expansion, so it moves only 2 px:
+/// `siftlab --opencv-lanes 8 -d www/demo/MyKITTI get_info -a nndr -t 0.8 1 1256`
+/// prints `((606, 116), [(608, 116)], [42.10700607299805])` (the same at 16
+/// lanes). So the first view shows a match with its circle, line and distance;
+/// feature 0 (the strongest response) sits on the left edge and has no match
+/// under nndr 0.8.
+pub const DEMO_FEATURE: usize = 1256;
 
 /// Applies a link's state to a fresh `Lab` and starts loading what it names.
 pub fn apply_url(lab: Lab, st: &UrlState) {

@@ -1,5 +1,6 @@
 //! The `ret value:` line exactly as the CLI prints it, and the table of matches.
 
+use super::ManualComparison;
 use crate::state::{Lab, Which};
 use leptos::prelude::*;
 use siftlab_core::pyfmt::py_float;
@@ -103,7 +104,8 @@ pub fn ResultPanel() -> impl IntoView {
                 }
             })
             .collect_view();
-        let more = (m.len() > TABLE_ROWS).then(|| view! { <p class="muted">{format!("… and {} more matches", m.len() - TABLE_ROWS)}</p> });
+        let more = (m.len() > TABLE_ROWS)
+            .then(|| view! { <p class="muted">{format!("… and {} more matches", m.len() - TABLE_ROWS)}</p> });
         Some(view! {
             <p class="muted">
                 {format!(
@@ -145,6 +147,7 @@ pub fn ResultPanel() -> impl IntoView {
                     {move || if copied.get() { "copied" } else { "copy" }}
                 </button>
             </div>
+            <ManualComparison/>
             <p class="exports">
                 "Save the lab's pictures: "
                 <button on:click=move |_| export(Picture::Feature) prop:disabled=move || tuple().is_none() data-testid="export-feature">

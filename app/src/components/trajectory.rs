@@ -1,12 +1,14 @@
-//! The lab's `view_trajectory`: monocular visual odometry over frames 0…N−1 of
-//! the demo or a MyKITTI folder, computed by the core in workers, drawn as it
-//! grows (truth green, estimate red, as in the lab's window), with the
-//! trajectory error and the lab's window as a PNG to download.
+//! The lab's `view_trajectory FRAME_ID`: monocular visual odometry over frames
+//! 0 … FRAME_ID (FRAME_ID + 1 frames, as the lab counts) of the demo or a
+//! MyKITTI folder, computed by the core in workers, drawn as it grows (truth
+//! green, estimate red, as in the lab's window), with the trajectory error and
+//! the lab's window as a PNG to download.
 
 use crate::client;
+use crate::frameset::{run_from_zero, vo_frame_count, vo_range_label};
 use crate::loading;
 use crate::msg::FromWorker;
-use crate::state::{Lab, Source};
+use crate::state::Lab;
 use leptos::prelude::*;
 use siftlab_core::render::trajectory::coordinates_text;
 
@@ -27,12 +29,6 @@ fn revoke(url: Option<String>) {
     }
 }
 
-/// Consecutive frames from 0 in the source (what the loop can run over).
-fn run_length(s: &Source) -> u32 {
-    let f = s.frames();
-    (0..).take_while(|i| f.contains(i)).count() as u32
-}
-
 #[derive(Clone, Debug, PartialEq)]
 struct Done {
     ate: f64,
@@ -43,7 +39,8 @@ struct Done {
 #[component]
 pub fn TrajectoryView() -> impl IntoView {
     let lab = expect_context::<Lab>();
-    let n_text = RwSignal::new(String::new());
+    // The lab's FRAME_ID: the last frame of the run.
+    let frame_text = RwSignal::new(String::new());
     let steps = RwSignal::new(Vec::<Step>::new());
     let total = RwSignal::new(0u32);
     let running = RwSignal::new(false);
@@ -53,14 +50,15 @@ pub fn TrajectoryView() -> impl IntoView {
     let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
     // When the workers got the frames: the live rate counts from there.
     let started_ms = StoredValue::new(0.0f64);
-    let available = move || lab.source.with(run_length);
-    Effect::new(move |_| n_text.set(available().to_string()));
+    // Frames 0, 1, 2, … with no gap: the demo's 119, 120, 149, 150 are not part of it.
+    let available = move || lab.source.with(|s| run_from_zero(s.frames()));
+    Effect::new(move |_| frame_text.set(available().saturating_sub(1).to_string()));
 
     let run = move |_| {
-        let n = match n_text.get_untracked().trim().parse::<u32>() {
-            Ok(n) if n >= 2 => n,
-            _ => {
-                error.set(Some("give a number of frames ≥ 2".into()));
+        let n = match vo_frame_count(&frame_text.get_untracked(), available()) {
+            Ok(n) => n,
+            Err(e) => {
+                error.set(Some(e));
                 return;
             }
         };
@@ -132,7 +130,12 @@ pub fn TrajectoryView() -> impl IntoView {
         let pad = span * 0.08;
         let (vx, vz, vs) = ((x0 + x1) / 2.0 - span / 2.0 - pad, (z0 + z1) / 2.0 - span / 2.0 - pad, span + 2.0 * pad);
         let line = |f: &dyn Fn(&Step) -> Option<P3>| {
-            s.iter().filter_map(f).filter(|p| p[0].is_finite() && p[2].is_finite()).map(|p| format!("{:.3},{:.3}", p[0], p[2])).collect::<Vec<_>>().join(" ")
+            s.iter()
+                .filter_map(f)
+                .filter(|p| p[0].is_finite() && p[2].is_finite())
+                .map(|p| format!("{:.3},{:.3}", p[0], p[2]))
+                .collect::<Vec<_>>()
+                .join(" ")
         };
         let est = line(&|(_, e, _)| Some(*e));
         let gt = line(&|(_, _, t)| *t);
@@ -153,16 +156,21 @@ pub fn TrajectoryView() -> impl IntoView {
         <section class="card trajectory" aria-label="Visual odometry">
             <h2>"8 · Visual odometry (the lab's view_trajectory)"</h2>
             <p class="muted">
-                "The lab's monocular VO on frames 0 … N−1: SIFT keypoints of the first frame, Lucas–Kanade tracking, "
+                "The lab's monocular VO, "<code>"view_trajectory FRAME_ID"</code>", on frames 0 … FRAME_ID: SIFT keypoints of the first frame, Lucas–Kanade tracking, "
                 "essential matrix (5-point RANSAC), recoverPose, scale from the ground-truth poses. "
                 <span class="legend-gt">"green: ground truth"</span>", "<span class="legend-est">"red: estimate"</span>"."
             </p>
             <div class="control-row">
                 <label class="ctl">
-                    <span>"Frames (N) " <span class="muted">{move || format!("{} available from 0", available())}</span></span>
-                    <input type="number" min="2" class="num" data-testid="vo-frames"
-                        prop:value=move || n_text.get()
-                        on:input=move |ev| n_text.set(event_target_value(&ev))/>
+                    <span>
+                        "FRAME_ID (the last frame) "
+                        <span class="muted" data-testid="vo-range">
+                            {move || frame_text.with(|t| vo_range_label(t, available()))}
+                        </span>
+                    </span>
+                    <input type="number" min="1" class="num" data-testid="vo-frame-id"
+                        prop:value=move || frame_text.get()
+                        on:input=move |ev| frame_text.set(event_target_value(&ev))/>
                 </label>
                 <button class="primary" data-testid="vo-run" on:click=run prop:disabled=move || running.get() || available() < 2>
                     "Run the odometry"
