@@ -4,6 +4,7 @@
 
 use super::image::Plane;
 use super::num::rne64;
+use crate::border::reflect101;
 
 /// `getGaussianKernelBitExact` for an f32 image: `ksize = rne(8σ + 1) | 1`
 /// (the factor 4 because the depth is not 8U), weights computed in f64 and
@@ -30,20 +31,6 @@ pub fn gaussian_kernel(sigma: f64) -> Vec<f32> {
     }
     k[h] = mul as f32;
     k
-}
-
-/// BORDER_REFLECT_101, repeated until inside: the top octaves can be
-/// narrower than the kernel radius.
-#[inline]
-fn reflect101(mut p: isize, len: usize) -> usize {
-    if len == 1 {
-        return 0;
-    }
-    let len = len as isize;
-    while p < 0 || p >= len {
-        p = if p < 0 { -p } else { 2 * (len - 1) - p };
-    }
-    p as usize
 }
 
 /// A plane as the blur reads it: row by row, each row either stored or
@@ -996,14 +983,6 @@ mod tests {
         assert_eq!(k5.len(), 27);
         assert_eq!(hex(&k5)[13], 0x3e0434fb);
         assert_eq!(hex(&k5)[0], 0x379b5026);
-    }
-
-    #[test]
-    fn reflect101_repeats_on_tiny_images() {
-        assert_eq!(reflect101(-1, 5), 1);
-        assert_eq!(reflect101(5, 5), 3);
-        assert_eq!(reflect101(-7, 3), 1); // 7 -> 4-7=-3 -> 3 -> 1
-        assert_eq!(reflect101(4, 1), 0);
     }
 
     #[test]
