@@ -512,7 +512,7 @@ mod x86 {
 /// `relaxed_madd` or the exact emulation); the histogram body has none.
 #[cfg(target_arch = "wasm32")]
 mod wasm {
-    use super::super::num::x4::{dispatch_fma4, Fma4};
+    use super::super::num::wasm::{dispatch_fma4, Fma4};
     use super::super::num::{load4 as load, store4 as store};
     use super::{cell_offsets, Rows, Samples, BINS_PER_DEG, D, HIST_LEN, N};
     use core::arch::wasm32::*;
