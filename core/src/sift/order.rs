@@ -5,7 +5,7 @@
 //! OpenCV's feature ids are whatever positions these algorithms leave, so
 //! they are reproduced move for move, not just "sorted by response".
 
-use super::KeyPoint;
+use super::keypoint::KeyPoint;
 #[cfg(test)]
 use std::cmp::Ordering;
 

@@ -9,8 +9,9 @@
 //! (SIMD128), with the same operations per lane.
 
 use super::image::Plane;
+use super::keypoint::KeyPoint;
 use super::num::{floor, fma, gradient_samples, rne, FLT_EPSILON};
-use super::{KeyPoint, SiftParams};
+use super::params::SiftParams;
 
 #[cfg(target_arch = "wasm32")]
 mod wasm;
