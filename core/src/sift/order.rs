@@ -192,7 +192,7 @@ fn adjust_heap(a: &mut [KeyPoint], f: usize, mut hole: usize, len: usize, v: Key
         a[f + hole] = a[f + child];
         hole = child;
     }
-    if len % 2 == 0 && child == (len - 2) / 2 {
+    if len.is_multiple_of(2) && child == (len - 2) / 2 {
         child = 2 * (child + 1);
         a[f + hole] = a[f + child - 1];
         hole = child - 1;

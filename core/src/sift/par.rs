@@ -74,7 +74,7 @@ pub fn threads() -> usize {
 /// Fills `out` (split into contiguous chunks of `chunk_len` multiples of
 /// `unit` elements) by calling `f(first_unit_index, chunk)` on each chunk.
 pub fn for_each_chunk<T: Send>(out: &mut [T], unit: usize, f: impl Fn(usize, &mut [T]) + Sync) {
-    let units = if unit == 0 { 0 } else { out.len() / unit };
+    let units = out.len().checked_div(unit).unwrap_or(0);
     let n = threads().min(units.max(1));
     // Thread start-up costs more than small planes (the top octaves) take.
     if n <= 1 || units < 2 || std::mem::size_of_val(out) < 256 * 1024 {

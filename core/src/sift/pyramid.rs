@@ -15,7 +15,7 @@ pub fn octave_count(base_w: usize, base_h: usize) -> usize {
     n.max(0) as usize
 }
 
-/// Incremental σ of each level so level i has total σ·k^i (f64, no FMA).
+/// Incremental σ of each level so level i has total σ·k^i (f64, no FMA; §SIFT-4).
 pub fn level_sigmas(sigma: f64, layers: usize) -> Vec<f64> {
     let mut sig = vec![sigma; layers + 3];
     let k = 2f64.powf(1.0 / layers as f64);
@@ -44,7 +44,7 @@ pub fn octave_levels(first: Plane, sig: &[f64]) -> Vec<Plane> {
     levels
 }
 
-/// The first level of the next octave: INTER_NEAREST to (w/2, h/2) of the
+/// The first level of the next octave (§SIFT-4): INTER_NEAREST to (w/2, h/2) of the
 /// level with twice the octave's base σ (level `layers`); for these sizes it
 /// always samples src[2y][2x].
 pub fn next_octave_base(levels: &[Plane], layers: usize) -> Plane {

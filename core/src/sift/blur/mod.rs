@@ -18,7 +18,7 @@ mod wasm;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-/// `getGaussianKernelBitExact` for an f32 image: `ksize = rne(8σ + 1) | 1`
+/// `getGaussianKernelBitExact` for an f32 image (§SIFT-3): `ksize = rne(8σ + 1) | 1`
 /// (the factor 4 because the depth is not 8U), weights computed in f64 and
 /// rounded once to f32.
 pub fn gaussian_kernel(sigma: f64) -> Vec<f32> {
@@ -77,7 +77,7 @@ pub fn gaussian_blur(src: &Plane, sigma: f64) -> Plane {
 pub fn gaussian_blur_rows<R: Rows>(src: &R, sigma: f64) -> Plane {
     let (w, h) = (src.width(), src.height());
     let kernel = gaussian_kernel(sigma);
-    // A single row or column gets a size-1 kernel on that axis (OpenCV's
+    // A single row or column gets a size-1 kernel on that axis (§SIFT-3, OpenCV's
     // createGaussianKernels special case).
     let kx: Vec<f32> = if w == 1 { vec![1.0] } else { kernel.clone() };
     let ky: Vec<f32> = if h == 1 { vec![1.0] } else { kernel };
@@ -168,7 +168,7 @@ fn blur_rows<R: Rows>(src: &R, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32
 
 /// Row filter of one row: a plain (non-symmetric) filter accumulated left to
 /// right, the first tap a product and every further tap one FMA — the order
-/// of OpenCV's AVX2 loop and its GCC-contracted scalar tail — over the row
+/// of OpenCV's AVX2 loop and its GCC-contracted scalar tail (§SIFT-3) — over the row
 /// extended by BORDER_REFLECT_101. Interior pixels read the row in place;
 /// only the r pixels at each end go through a small reflected copy (copying
 /// every row first was 3 % of a VO frame's CPU time). Each pixel's taps are
@@ -226,7 +226,7 @@ const SMALL_BLOCK: usize = 16;
 #[inline(always)]
 fn blocks(w: usize, b: usize) -> (impl Iterator<Item = usize>, usize) {
     let whole = if w < b { 0 } else { w / b };
-    let last = (w >= b && w % b != 0).then_some(w.wrapping_sub(b));
+    let last = (w >= b && !w.is_multiple_of(b)).then_some(w.wrapping_sub(b));
     ((0..whole).map(move |i| i * b).chain(last), if w < b { 0 } else { w })
 }
 

@@ -2,7 +2,8 @@
 //! the lane-wise exact FMA emulation, four vectors per block; the rest of the
 //! row pixel by pixel. A fast path keeps tame data's sums in f64 and redoes
 //! the rare block that needs the exact rounding; the relaxed-SIMD build uses
-//! the engine's fused `relaxed_madd` where it has one.
+//! the engine's fused `relaxed_madd` where it has one. Either way each tap is
+//! the single-rounding FMA of docs/fidelity.md §SIFT-3 (§SIFT-15).
 
 use super::super::num::{fma, fma_emulated_x4, load4 as load, store4 as store};
 use core::arch::wasm32::*;
@@ -366,7 +367,7 @@ mod tests {
         // Column pass: pixel 5 sees the same two taps in the kernel's upper half
         // (pair q of rows has weight k[c+1+q]; the centre row has k[c]).
         let (t, p1, want) = hard_sum(&k, c + 1..k.len());
-        let zeros = vec![0f32; 16];
+        let zeros = [0f32; 16];
         let mut rows = vec![vec![0f32; 16]; k.len() - c];
         rows[t - 1 - c][5] = 1.0;
         rows[t - c][5] = p1;

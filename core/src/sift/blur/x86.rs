@@ -1,7 +1,8 @@
 //! The blur's passes compiled for x86-64 with FMA (AVX2, and AVX-512 where
 //! the CPU has it), picked at run time by the dispatch in `mod.rs`: the plain
 //! loops again, because `mul_add` without the `fma` target feature is a
-//! library call per tap; and the AVX2 two-row column pass.
+//! library call per tap; and the AVX2 two-row column pass. Every pixel sees
+//! the taps of docs/fidelity.md §SIFT-3 in its order, fused where it fuses.
 
 use super::{accumulate_column_generic, accumulate_row_generic, blocks, BLOCK};
 use std::arch::x86_64::*;
@@ -42,8 +43,8 @@ const PREFETCH_AHEAD: usize = 128;
 /// (R[y+1+k] is R[y+(k+1)], R[y+1−k] is R[y−(k−1)]), so a tap costs two
 /// loads per vector for both rows instead of two per row: the ring is read
 /// from L2, and that read bounded the one-row pass. Each pixel still sees
-/// OpenCV's operations in OpenCV's order: centre·k0, then fma(up + down, kk, acc)
-/// for k = 1..=c.
+/// OpenCV's operations in OpenCV's order (§SIFT-3): centre·k0, then
+/// fma(up + down, kk, acc) for k = 1..=c.
 ///
 /// In intrinsics, three vectors a row (the generic form,
 /// [`column_pair_block`], compiled to partial-vector shuffles for its carried
@@ -86,9 +87,12 @@ pub fn column_pair_avx2(rows: &[&[f32]], ky: &[f32], d0: &mut [f32], d1: &mut [f
         // Pixels x..x + 24 of both output rows. Every ring row and both
         // output rows hold at least w ≥ x + 24 floats (asserted above; the
         // last block of `blocks` ends at w).
-        // SAFETY: x + 8·v + 8 <= w for v < V, inside every row (see above).
-        let load =
-            |r: *const f32| -> [__m256; V] { std::array::from_fn(|v| unsafe { _mm256_loadu_ps(r.add(x + 8 * v)) }) };
+        let load = |r: *const f32| -> [__m256; V] {
+            std::array::from_fn(|v| {
+                // SAFETY: x + 8·v + 8 <= w for v < V, inside every row (see above).
+                unsafe { _mm256_loadu_ps(r.add(x + 8 * v)) }
+            })
+        };
         let k0 = _mm256_set1_ps(ky[0]);
         let (centre0, centre1) = (load(centres.0), load(centres.1));
         let mut acc0: [__m256; V] = std::array::from_fn(|v| _mm256_mul_ps(centre0[v], k0));

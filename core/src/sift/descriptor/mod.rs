@@ -18,6 +18,7 @@ mod wasm;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+// §SIFT-1: 4×4 cells of 8 bins, window factor 3, clip at 0.2, scale 512.
 pub(super) const D: usize = 4; // SIFT_DESCR_WIDTH
 pub(super) const N: usize = 8; // SIFT_DESCR_HIST_BINS
 const SCL_FCTR: f32 = 3.0;
@@ -80,7 +81,7 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
                 hist[idx + off + 1] += rco1;
             }
         } else {
-            // The scalar tail, contracted by GCC: `rc - rc*obin` is one FMA
+            // The scalar tail (§SIFT-11, §SIFT-13), contracted by GCC: `rc - rc*obin` is one FMA
             // and `hist += rc*obin` another.
             for (off, rc) in cell_offsets().into_iter().zip(rc) {
                 hist[idx + off] += fma(-rc, obin, rc);
@@ -256,7 +257,7 @@ fn sample_columns(i: i64, radius: i64, cos_t: f32, sin_t: f32) -> Option<(i64, i
     }
 }
 
-/// Accumulates the samples `0..simd_len` (OpenCV's SIMD body) with vector
+/// Accumulates the samples `0..simd_len` (OpenCV's SIMD body, §SIFT-11) with vector
 /// arithmetic where the CPU allows; returns how many it did.
 #[inline(always)]
 fn accumulate_simd_body(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HIST_LEN]) -> usize {
@@ -281,8 +282,8 @@ fn accumulate_simd_body(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HI
     }
 }
 
-/// Clip at 0.2 of the norm, renormalise to 512 and round: OpenCV's
-/// accumulator layout for the first norm depends on its SIMD width.
+/// Clip at 0.2 of the norm, renormalise to 512 and round (§SIFT-11): OpenCV's
+/// accumulator layout for the first norm depends on its SIMD width (§SIFT-13).
 #[inline(always)]
 fn normalize(raw: &mut [f32; 128], lanes: usize) -> [u8; 128] {
     let nrm2 = if lanes == 16 {

@@ -1,6 +1,7 @@
 //! The descriptor's kernels with WebAssembly SIMD128, four samples a step:
 //! the same operations per lane as the scalar loops of `mod.rs`, so the same
-//! samples in the same order and the same histogram. Sample rows use the FMA
+//! samples in the same order and the same histogram (docs/fidelity.md
+//! §SIFT-11). Sample rows use the FMA
 //! of `num::wasm` (fused `relaxed_madd` or the exact emulation); the histogram
 //! body has none.
 

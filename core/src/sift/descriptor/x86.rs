@@ -1,7 +1,8 @@
 //! The descriptor's vector kernels for x86-64: a window row's samples and
 //! OpenCV's SIMD histogram body, 16 lanes with AVX-512 and 8 with AVX2, the
 //! same operations per lane as the scalar loops of `mod.rs`, so the same
-//! samples in the same order and the same histogram.
+//! samples in the same order and the same histogram (docs/fidelity.md
+//! §SIFT-11: the SIMD body rounds every product and difference).
 
 use super::{cell_offsets, Rows, Samples, BINS_PER_DEG, D, HIST_LEN, N};
 use std::arch::x86_64::*;

@@ -8,6 +8,7 @@ use super::super::num::{fma, pow2f, rne, rne64};
 use super::super::params::SiftParams;
 use super::IMG_BORDER;
 
+// §SIFT-1: at most five refinement steps; the image and derivative scales.
 const MAX_INTERP_STEPS: usize = 5;
 
 const IMG_SCALE: f32 = 1.0 / 255.0;

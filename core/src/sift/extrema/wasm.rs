@@ -3,7 +3,7 @@
 //! columns, then the threshold and comparison. `pmax`/`pmin` are one
 //! instruction each and equal `max`/`min` here: no NaN arises from 8-bit
 //! images, and the ±0 ties where they differ cannot decide a test whose value
-//! lies beyond the threshold.
+//! lies beyond the threshold (docs/fidelity.md §SIFT-6).
 
 use super::super::num::{load4 as load, store4 as store};
 use core::arch::wasm32::*;

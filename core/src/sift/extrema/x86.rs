@@ -1,6 +1,6 @@
 //! The scan's x86 kernels: the DoG rows of six Gaussian rows at once (AVX2)
 //! and the 26-neighbour test against the separable 3×3×3 maximum and
-//! minimum (AVX-512 and AVX2).
+//! minimum (AVX-512 and AVX2): docs/fidelity.md §SIFT-5 and §SIFT-6.
 
 use std::arch::x86_64::*;
 
@@ -12,11 +12,14 @@ use std::arch::x86_64::*;
 /// floats of its own, apart from the others and from the `g` rows.
 #[target_feature(enable = "avx2")]
 pub unsafe fn differences6_avx2(g: [*const f32; 6], d: [*mut f32; 5], w: usize) {
-    // SAFETY (both closures' blocks): x + 8 <= w, inside every row (the
-    // caller's promise).
+    // Called with x + 8 <= w.
     let block = |x: usize| {
-        let v: [__m256; 6] = std::array::from_fn(|k| unsafe { _mm256_loadu_ps(g[k].add(x)) });
+        let v: [__m256; 6] = std::array::from_fn(|k| {
+            // SAFETY: x + 8 <= w, inside every row (the caller's promise).
+            unsafe { _mm256_loadu_ps(g[k].add(x)) }
+        });
         for k in 0..5 {
+            // SAFETY: as above.
             unsafe { _mm256_storeu_ps(d[k].add(x), _mm256_sub_ps(v[k + 1], v[k])) };
         }
     };

@@ -18,6 +18,9 @@ pub fn fast_atan2_deg(y: f32, x: f32) -> f32 {
     let c = ax.min(ay) / (ax.max(ay) + ATAN_EPS);
     let c2 = c * c;
     let mut a = fma(fma(fma(c2, ATAN_P7, ATAN_P5), c2, ATAN_P3), c2, ATAN_P1) * c;
+    // "90 − a unless ax ≥ ay" (§SIFT-12), negated as written: OpenCV's
+    // `ax >= ay` test, whose else branch a NaN would take too.
+    #[allow(clippy::neg_cmp_op_on_partial_ord)]
     if !(ax >= ay) {
         a = 90.0 - a;
     }

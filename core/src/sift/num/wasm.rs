@@ -2,7 +2,7 @@
 //! branches per call), so the gradient kernels of orientation and descriptors
 //! get four lanes by hand: [`fast_atan2_deg`](super::fast_atan2_deg),
 //! [`magnitude`](super::magnitude) and [`exp32f`](super::exp32f) with the
-//! same operations in the same order per lane, so the same bits. Each runs
+//! same operations in the same order per lane, so the same bits (§SIFT-12). Each runs
 //! with the engine's fused `relaxed_madd` where the relaxed build found it
 //! fused, else with [`fma_emulated_x4`]; the caller finishes the last
 //! `len % 4` samples with the scalar kernels. Also the bounds-checked vector

@@ -1,6 +1,6 @@
 //! [`exp32f`](super::exp32f) eight lanes at a time with AVX2: the same
 //! operations in the same order per lane (the table read by a gather), so the
-//! same bits.
+//! same bits (docs/fidelity.md §SIFT-12).
 
 use super::exp::{EXP_A1, EXP_A2, EXP_A3, EXP_A4, EXP_TAB};
 use std::arch::x86_64::*;

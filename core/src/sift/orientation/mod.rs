@@ -15,6 +15,7 @@ use super::params::SiftParams;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+// §SIFT-1: 36 bins, window σ factor 1.5, radius factor 4.5, peak ratio 0.8.
 const ORI_HIST_BINS: usize = 36;
 const ORI_SIG_FCTR: f32 = 1.5;
 const ORI_RADIUS: f32 = 4.5;
@@ -88,7 +89,7 @@ fn push_oriented(levels: &[Plane], refined: Refined, p: &SiftParams, out: &mut V
             } else if bin >= n as f32 {
                 bin -= n as f32;
             }
-            // 360 − (360/n)·bin contracted by GCC into one FMA.
+            // 360 − (360/n)·bin contracted by GCC into one FMA (§SIFT-8).
             let mut angle = fma(-bin, 360.0 / n as f32, 360.0);
             if (angle - 360.0).abs() < FLT_EPSILON {
                 angle = 0.0;
@@ -120,9 +121,9 @@ std::thread_local! {
     static SCRATCH: std::cell::Cell<Scratch> = std::cell::Cell::new(Scratch::default());
 }
 
-/// The smoothed 36-bin histogram. `lanes` is the SIMD width OpenCV's
+/// The smoothed 36-bin histogram (§SIFT-8). `lanes` is the SIMD width OpenCV's
 /// dispatched kernel used: the first `len − len % lanes` samples add a
-/// rounded product, the scalar tail is FMA-contracted.
+/// rounded product, the scalar tail is FMA-contracted (§SIFT-13).
 #[inline(always)]
 fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize) -> [f32; 36] {
     // Taken out and put back rather than borrowed in a closure: a closure
@@ -264,7 +265,7 @@ fn orientation_hist_with(
         let b = t[i + 1] + t[i + 3];
         let ci = t[i + 2];
         // Bins 0..31 go through the SIMD loop, 32..35 through the scalar
-        // tail, which GCC fused in a different order.
+        // tail, which GCC fused in a different order (§SIFT-8, smoothing).
         *hi = if i < 32 { fma(a, 0.0625, fma(b, 0.25, ci * 0.375)) } else { fma(ci, 0.375, fma(a, 0.0625, b * 0.25)) };
     }
     h

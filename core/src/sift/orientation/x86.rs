@@ -1,4 +1,5 @@
-//! The orientation histogram's binning of OpenCV's SIMD body with AVX2.
+//! The orientation histogram's binning of OpenCV's SIMD body with AVX2: the
+//! rounded products of docs/fidelity.md §SIFT-8, added in sample order.
 
 use std::arch::x86_64::*;
 
