@@ -7,6 +7,7 @@
 //! the lab's commands draw ([`render`]). The CLI and the web app only load
 //! input, call this crate and show what it returns.
 
+mod border;
 #[cfg(all(feature = "cli", not(target_arch = "wasm32")))]
 pub mod cli;
 pub mod dataset;

@@ -55,7 +55,7 @@ impl Rows for Upsampled {
 /// source rows: (left, right, weight of right).
 fn vertical_taps(t: usize, n: usize) -> (usize, usize, f32) {
     let m = t / 2;
-    if t % 2 == 0 {
+    if t.is_multiple_of(2) {
         if m == 0 {
             (0, 0, 0.0)
         } else {
@@ -79,7 +79,7 @@ fn blend_rows(ta: &[f32], tb: &[f32], f: f32, d: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
         #[target_feature(enable = "avx2")]
-        unsafe fn avx2(ta: &[f32], tb: &[f32], f: f32, d: &mut [f32]) {
+        fn avx2(ta: &[f32], tb: &[f32], f: f32, d: &mut [f32]) {
             body(ta, tb, f, d)
         }
         if crate::simd::avx2() {
@@ -129,7 +129,7 @@ fn upsample_row(src: &[u8], out: &mut [f32]) {
     #[cfg(target_arch = "x86_64")]
     {
         #[target_feature(enable = "avx2")]
-        unsafe fn avx2(src: &[u8], out: &mut [f32]) {
+        fn avx2(src: &[u8], out: &mut [f32]) {
             body(src, out)
         }
         if crate::simd::avx2() {

@@ -5,7 +5,7 @@
 //! OpenCV's feature ids are whatever positions these algorithms leave, so
 //! they are reproduced move for move, not just "sorted by response".
 
-use super::KeyPoint;
+use super::keypoint::KeyPoint;
 #[cfg(test)]
 use std::cmp::Ordering;
 
@@ -192,7 +192,7 @@ fn adjust_heap(a: &mut [KeyPoint], f: usize, mut hole: usize, len: usize, v: Key
         a[f + hole] = a[f + child];
         hole = child;
     }
-    if len % 2 == 0 && child == (len - 2) / 2 {
+    if len.is_multiple_of(2) && child == (len - 2) / 2 {
         child = 2 * (child + 1);
         a[f + hole] = a[f + child - 1];
         hole = child - 1;

@@ -74,7 +74,7 @@ pub fn threads() -> usize {
 /// Fills `out` (split into contiguous chunks of `chunk_len` multiples of
 /// `unit` elements) by calling `f(first_unit_index, chunk)` on each chunk.
 pub fn for_each_chunk<T: Send>(out: &mut [T], unit: usize, f: impl Fn(usize, &mut [T]) + Sync) {
-    let units = if unit == 0 { 0 } else { out.len() / unit };
+    let units = out.len().checked_div(unit).unwrap_or(0);
     let n = threads().min(units.max(1));
     // Thread start-up costs more than small planes (the top octaves) take.
     if n <= 1 || units < 2 || std::mem::size_of_val(out) < 256 * 1024 {
@@ -126,6 +126,47 @@ pub fn for_each_chunk_dynamic<T: Send>(out: &mut [T], chunk_len: usize, f: impl 
     }
     #[cfg(target_arch = "wasm32")]
     f(0, out);
+}
+
+/// Runs `f(job, out)` over the jobs, taken one at a time by the threads
+/// (on scoped threads natively, in order on the calling thread otherwise);
+/// each thread appends to its own vector, and these are concatenated into
+/// `out` in thread order: for results whose order does not matter (SIFT's
+/// keypoints: docs/fidelity.md §SIFT-10 sorts everything).
+pub fn collect_jobs<J: Sync, T: Send>(jobs: &[J], f: impl Fn(&J, &mut Vec<T>) + Sync, out: &mut Vec<T>) {
+    #[cfg(not(target_arch = "wasm32"))]
+    {
+        // The cap of `with_threads`: an odometry detection worker,
+        // one frame per core, scans on its own thread (before, each scan
+        // started threads for every core, four busy threads on two cores).
+        let threads = threads().min(jobs.len());
+        if threads > 1 {
+            let next = std::sync::atomic::AtomicUsize::new(0);
+            let parts: Vec<Vec<T>> = std::thread::scope(|s| {
+                let handles: Vec<_> = (0..threads)
+                    .map(|_| {
+                        s.spawn(|| {
+                            let mut local = Vec::new();
+                            loop {
+                                let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                                let Some(job) = jobs.get(i) else { break };
+                                f(job, &mut local);
+                            }
+                            local
+                        })
+                    })
+                    .collect();
+                handles.into_iter().map(|h| h.join().unwrap_or_default()).collect()
+            });
+            for p in parts {
+                out.extend(p);
+            }
+            return;
+        }
+    }
+    for j in jobs {
+        f(j, out);
+    }
 }
 
 #[cfg(test)]

@@ -15,7 +15,7 @@ pub fn octave_count(base_w: usize, base_h: usize) -> usize {
     n.max(0) as usize
 }
 
-/// Incremental σ of each level so level i has total σ·k^i (f64, no FMA).
+/// Incremental σ of each level so level i has total σ·k^i (f64, no FMA; §SIFT-4).
 pub fn level_sigmas(sigma: f64, layers: usize) -> Vec<f64> {
     let mut sig = vec![sigma; layers + 3];
     let k = 2f64.powf(1.0 / layers as f64);
@@ -27,31 +27,13 @@ pub fn level_sigmas(sigma: f64, layers: usize) -> Vec<f64> {
     sig
 }
 
-/// `layers + 3` Gaussian levels per octave, indexed `o * (layers + 3) + i`.
-/// OpenCV also stores the `layers + 2` DoG levels (level i+1 − level i);
-/// here the extrema scan takes those differences row by row as it goes
-/// ([`super::extrema::scan_octave`]), the same f32 subtractions, instead of
-/// writing five more planes per octave and reading them back three times.
-pub fn gaussian_pyramid(base: Plane, octaves: usize, sigma: f64, layers: usize) -> Vec<Plane> {
-    let sig = level_sigmas(sigma, layers);
-    let per = layers + 3;
-    let mut gauss: Vec<Plane> = Vec::with_capacity(octaves * per);
-    if octaves == 0 {
-        return gauss;
-    }
-    let mut first = base;
-    for o in 0..octaves {
-        gauss.extend(octave_levels(first, &sig));
-        if o + 1 == octaves {
-            break;
-        }
-        first = next_octave_base(&gauss[o * per..], layers);
-    }
-    gauss
-}
-
 /// The `sig.len()` Gaussian levels of one octave from its first level, each
-/// blurred from the one before by `sig[i]`.
+/// blurred from the one before by `sig[i]`; the pyramid is `octaves` of
+/// these, octave o + 1 starting from [`next_octave_base`] of octave o.
+/// OpenCV also stores the `layers + 2` DoG levels (level i+1 − level i);
+/// here the extrema scan takes those differences row by row as it goes, the
+/// same f32 subtractions, instead of writing five more planes per octave
+/// and reading them back three times.
 pub fn octave_levels(first: Plane, sig: &[f64]) -> Vec<Plane> {
     let mut levels = Vec::with_capacity(sig.len());
     levels.push(first);
@@ -62,7 +44,7 @@ pub fn octave_levels(first: Plane, sig: &[f64]) -> Vec<Plane> {
     levels
 }
 
-/// The first level of the next octave: INTER_NEAREST to (w/2, h/2) of the
+/// The first level of the next octave (§SIFT-4): INTER_NEAREST to (w/2, h/2) of the
 /// level with twice the octave's base σ (level `layers`); for these sizes it
 /// always samples src[2y][2x].
 pub fn next_octave_base(levels: &[Plane], layers: usize) -> Plane {

@@ -5,6 +5,7 @@
 //! accumulation orders of OpenCV's 128-bit SIMD loops. All of this is baseline
 //! code in OpenCV (no FMA), so every f32 operation below rounds separately.
 
+use crate::border::reflect101;
 use crate::image::GrayImage;
 
 /// Window side (21×21); the lab never changes it.
@@ -52,20 +53,6 @@ pub struct LkResult {
     /// Mean absolute difference (8-bit units) for status-1 points; for a
     /// status-0 point OpenCV leaves uninitialized memory, here it is 0.
     pub err: Vec<f32>,
-}
-
-/// `borderInterpolate(p, len, BORDER_REFLECT_101)`, repeated for borders wider
-/// than the image.
-#[inline]
-fn reflect101(mut p: isize, len: usize) -> usize {
-    let n = len as isize;
-    if n == 1 {
-        return 0;
-    }
-    while p < 0 || p >= n {
-        p = if p < 0 { -p } else { 2 * n - 2 - p };
-    }
-    p as usize
 }
 
 /// `cv::pyrDown` on 8-bit data, exact integer arithmetic: the 5×5 binomial

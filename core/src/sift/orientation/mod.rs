@@ -1,16 +1,60 @@
 //! Orientation assignment, `calcOrientationHist` (docs/fidelity.md §SIFT-8): a 36-bin
 //! gradient histogram around the refined pixel, smoothed, one keypoint per
 //! peak above 80% of the maximum.
+//!
+//! The extremum scan hands each refined extremum to an [`Orienter`], which
+//! counts its histogram and pushes the oriented keypoints. This file is the
+//! histogram in OpenCV's order and the dispatch; `x86.rs` holds the AVX2 form
+//! of the binning of OpenCV's SIMD body.
 
-use super::extrema::Refined;
 use super::image::Plane;
+use super::keypoint::{KeyPoint, Refined};
 use super::num::{exp32f_into, fma, gradient_directions_into, rne, FLT_EPSILON};
-use super::{KeyPoint, SiftParams};
+use super::params::SiftParams;
 
+#[cfg(target_arch = "x86_64")]
+mod x86;
+
+// §SIFT-1: 36 bins, window σ factor 1.5, radius factor 4.5, peak ratio 0.8.
 const ORI_HIST_BINS: usize = 36;
 const ORI_SIG_FCTR: f32 = 1.5;
 const ORI_RADIUS: f32 = 4.5;
 const ORI_PEAK_RATIO: f32 = 0.8;
+
+/// Orients the refined extrema of one scan, in the order they come, into
+/// `out`: each histogram is taken one extremum late, so its window's rows
+/// (most of them below the scan, not read yet) arrive while the one before
+/// is counted. Call [`Orienter::finish`] after the last one.
+pub struct Orienter<'a> {
+    levels: &'a [Plane],
+    p: &'a SiftParams,
+    out: &'a mut Vec<KeyPoint>,
+    pending: Option<Refined>,
+}
+
+impl<'a> Orienter<'a> {
+    /// For the extrema of the octave whose Gaussian levels are `levels`.
+    pub fn new(levels: &'a [Plane], p: &'a SiftParams, out: &'a mut Vec<KeyPoint>) -> Self {
+        Orienter { levels, p, out, pending: None }
+    }
+
+    /// Takes the next refined extremum: asks for its window, and orients
+    /// the one before it.
+    #[inline(always)]
+    pub fn push(&mut self, refined: Refined) {
+        prefetch_histogram_window(self.levels, &refined);
+        if let Some(before) = self.pending.replace(refined) {
+            push_oriented(self.levels, before, self.p, self.out);
+        }
+    }
+
+    /// Orients the last extremum.
+    pub fn finish(self) {
+        if let Some(last) = self.pending {
+            push_oriented(self.levels, last, self.p, self.out);
+        }
+    }
+}
 
 /// The keypoint's scale in its octave's pixels, and its Gaussian level
 /// (`levels` are its octave's).
@@ -21,13 +65,13 @@ fn scale_and_level<'g>(levels: &'g [Plane], refined: &Refined) -> (f32, &'g Plan
 
 /// Asks for the rows of the window [`push_oriented`] will read for
 /// `refined`, ahead of it.
-pub fn prefetch_histogram_window(levels: &[Plane], refined: &Refined) {
+fn prefetch_histogram_window(levels: &[Plane], refined: &Refined) {
     let (scl, img) = scale_and_level(levels, refined);
     prefetch_window(img, refined.r, refined.c, rne(ORI_RADIUS * scl).max(0) as usize + 1);
 }
 
 /// Pushes one copy of the refined keypoint per qualifying histogram peak.
-pub fn push_oriented(levels: &[Plane], refined: Refined, p: &SiftParams, out: &mut Vec<KeyPoint>) {
+fn push_oriented(levels: &[Plane], refined: Refined, p: &SiftParams, out: &mut Vec<KeyPoint>) {
     let (scl, img) = scale_and_level(levels, &refined);
     let Refined { kp, r, c, .. } = refined;
     let (radius, sigma, lanes) = (rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
@@ -45,7 +89,7 @@ pub fn push_oriented(levels: &[Plane], refined: Refined, p: &SiftParams, out: &m
             } else if bin >= n as f32 {
                 bin -= n as f32;
             }
-            // 360 − (360/n)·bin contracted by GCC into one FMA.
+            // 360 − (360/n)·bin contracted by GCC into one FMA (§SIFT-8).
             let mut angle = fma(-bin, 360.0 / n as f32, 360.0);
             if (angle - 360.0).abs() < FLT_EPSILON {
                 angle = 0.0;
@@ -77,9 +121,9 @@ std::thread_local! {
     static SCRATCH: std::cell::Cell<Scratch> = std::cell::Cell::new(Scratch::default());
 }
 
-/// The smoothed 36-bin histogram. `lanes` is the SIMD width OpenCV's
+/// The smoothed 36-bin histogram (§SIFT-8). `lanes` is the SIMD width OpenCV's
 /// dispatched kernel used: the first `len − len % lanes` samples add a
-/// rounded product, the scalar tail is FMA-contracted.
+/// rounded product, the scalar tail is FMA-contracted (§SIFT-13).
 #[inline(always)]
 fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize) -> [f32; 36] {
     // Taken out and put back rather than borrowed in a closure: a closure
@@ -191,7 +235,7 @@ fn orientation_hist_with(
     let (oris, mags) = (&oris[..], &mags[..]);
     #[cfg(target_arch = "x86_64")]
     let first = if crate::simd::avx2_fma() {
-        // SAFETY: the CPU has the features the function is compiled for.
+        // SAFETY: the CPU has AVX2 and FMA, the kernel's features.
         unsafe { x86::bin_products(wts, oris, mags, simd_len, offsets, prods, &mut t) };
         simd_len
     } else {
@@ -221,7 +265,7 @@ fn orientation_hist_with(
         let b = t[i + 1] + t[i + 3];
         let ci = t[i + 2];
         // Bins 0..31 go through the SIMD loop, 32..35 through the scalar
-        // tail, which GCC fused in a different order.
+        // tail, which GCC fused in a different order (§SIFT-8, smoothing).
         *hi = if i < 32 { fma(a, 0.0625, fma(b, 0.25, ci * 0.375)) } else { fma(ci, 0.375, fma(a, 0.0625, b * 0.25)) };
     }
     h
@@ -266,108 +310,4 @@ fn prefetch_span(row: &[f32], x0: usize, x1: usize) {
     }
     #[cfg(not(target_arch = "x86_64"))]
     let _ = (row, x0, x1);
-}
-
-#[cfg(target_arch = "x86_64")]
-mod x86 {
-    use std::arch::x86_64::*;
-
-    /// Bin b's masks for the five vectors: all ones in lane b % 8 of
-    /// vector b / 8, zeros elsewhere, each vector on its own 32 bytes.
-    #[repr(C, align(64))]
-    struct Masks([[[u32; 8]; 5]; 36]);
-    static ONE_HOT: Masks = {
-        let mut a = [[[0u32; 8]; 5]; 36];
-        let mut b = 0;
-        while b < 36 {
-            a[b][b / 8][b % 8] = u32::MAX;
-            b += 1;
-        }
-        Masks(a)
-    };
-    const MASKS_BYTES: i32 = 5 * 32;
-
-    /// The histogram's first `n` samples (those OpenCV's SIMD loop takes:
-    /// a rounded product, then an add) into `t[2..38]`, with all 36 bins in
-    /// five vectors and each sample added to every bin, masked to 0.0 in
-    /// all but its own. x + 0.0 = x for every x here (sums of non-negative
-    /// products start at +0.0), so each bin sees exactly its samples' adds
-    /// in sample order, as in the scalar loop. That loop's read-add-write of
-    /// `t[bin]` made consecutive samples of one bin — the usual case, as
-    /// neighbouring gradients point alike — a chain through memory (about
-    /// 9 cycles a sample); here the chain is one vector add.
-    ///
-    /// Two passes: the bins and products of eight samples at a time go to
-    /// `offsets` and `prods`, then each sample's masks and product are
-    /// plain loads (a broadcast load for the product). Taken from the
-    /// vectors in one pass, every sample cost two lane shuffles and five
-    /// compares on the vector pipes the adds need: 2.6–2.7 against
-    /// 1.7–2.0 ns a sample on this machine (same process, interleaved).
-    #[target_feature(enable = "avx2,fma")]
-    pub unsafe fn bin_products(
-        wts: &[f32],
-        oris: &[f32],
-        mags: &[f32],
-        n: usize,
-        offsets: &mut Vec<u32>,
-        prods: &mut Vec<f32>,
-        t: &mut [f32; 40],
-    ) {
-        assert!(n <= wts.len() && n <= oris.len() && n <= mags.len());
-        let room = n.div_ceil(8) * 8;
-        offsets.resize(room.max(offsets.len()), 0);
-        prods.resize(room.max(prods.len()), 0.0);
-        let scale = _mm256_set1_ps(super::ORI_HIST_BINS as f32 / 360.0);
-        let (n36, zero) = (_mm256_set1_epi32(36), _mm256_setzero_si256());
-        let bytes = _mm256_set1_epi32(MASKS_BYTES);
-        let mut k = 0;
-        while k < n {
-            let m = (n - k).min(8);
-            // Eight samples' bins and products at once (a partial group
-            // computes lanes past n from zeros, never read).
-            let (o, wt, mg) = if m == 8 {
-                (
-                    _mm256_loadu_ps(oris.as_ptr().add(k)),
-                    _mm256_loadu_ps(wts.as_ptr().add(k)),
-                    _mm256_loadu_ps(mags.as_ptr().add(k)),
-                )
-            } else {
-                let mut a = [[0f32; 8]; 3];
-                a[0][..m].copy_from_slice(&oris[k..k + m]);
-                a[1][..m].copy_from_slice(&wts[k..k + m]);
-                a[2][..m].copy_from_slice(&mags[k..k + m]);
-                (_mm256_loadu_ps(a[0].as_ptr()), _mm256_loadu_ps(a[1].as_ptr()), _mm256_loadu_ps(a[2].as_ptr()))
-            };
-            // cvRound((n/360)·ori), then into 0..36 as the scalar loop does.
-            let mut b = _mm256_cvtps_epi32(_mm256_round_ps::<{ _MM_FROUND_TO_NEAREST_INT | _MM_FROUND_NO_EXC }>(
-                _mm256_mul_ps(scale, o),
-            ));
-            b = _mm256_sub_epi32(
-                b,
-                _mm256_and_si256(_mm256_cmpgt_epi32(b, _mm256_sub_epi32(n36, _mm256_set1_epi32(1))), n36),
-            );
-            b = _mm256_add_epi32(b, _mm256_and_si256(_mm256_cmpgt_epi32(zero, b), n36));
-            // Already 0..36 for every finite orientation; the unsigned
-            // clamp only keeps a NaN's bin from addressing outside ONE_HOT.
-            b = _mm256_min_epu32(b, _mm256_set1_epi32(35));
-            _mm256_storeu_si256(offsets.as_mut_ptr().add(k) as *mut __m256i, _mm256_mullo_epi32(b, bytes));
-            _mm256_storeu_ps(prods.as_mut_ptr().add(k), _mm256_mul_ps(wt, mg));
-            k += m;
-        }
-        let masks = ONE_HOT.0.as_ptr() as *const u8;
-        let mut h = [_mm256_setzero_ps(); 5];
-        for (&off, p) in offsets[..n].iter().zip(&prods[..n]) {
-            // Bins are 0..36 (clamped above), so the offset is inside ONE_HOT.
-            let m = masks.add(off as usize) as *const f32;
-            let pj = _mm256_broadcast_ss(p);
-            for (v, hv) in h.iter_mut().enumerate() {
-                *hv = _mm256_add_ps(*hv, _mm256_and_ps(_mm256_load_ps(m.add(8 * v)), pj));
-            }
-        }
-        let mut out = [0f32; 40];
-        for (v, hv) in h.iter().enumerate() {
-            _mm256_storeu_ps(out.as_mut_ptr().add(8 * v), *hv);
-        }
-        t[2..38].copy_from_slice(&out[..36]);
-    }
 }
