@@ -93,7 +93,10 @@ mod tests {
         assert_eq!(py_float(-2.5), "-2.5");
         assert_eq!(py_float(0.0), "0.0");
         // Two 16-digit strings round-trip; Python picks the nearer (a tie here: even).
-        assert_eq!(py_float(66.618316650390625), "66.61831665039062");
+        // The literal is the f32 value exactly, every digit of it on purpose.
+        #[allow(clippy::excessive_precision)]
+        let exact = 66.618316650390625;
+        assert_eq!(py_float(exact), "66.61831665039062");
     }
 
     #[test]

@@ -161,7 +161,7 @@ pub fn run(cli: &Cli) -> Result<()> {
                     last_draw = std::time::Instant::now();
                     open = done != total;
                     let w = 40;
-                    let filled = if total == 0 { w } else { done * w / total };
+                    let filled = (done * w).checked_div(total).unwrap_or(w);
                     eprint!("\r[{}{}] {done}/{total} frames", "#".repeat(filled), " ".repeat(w - filled));
                     if done == total {
                         eprintln!();
