@@ -2,6 +2,11 @@
 //! OpenCV's `BFMatcher().knnMatch(des1, des2, k=2)`, and each lab strategy applied to
 //! every query feature, as compared by tests/scripts/bench_compare.sh.
 
+// criterion is a native dev-dependency: on wasm32 (`cargo clippy --all-targets
+// --target wasm32-unknown-unknown`) this bench is an empty program.
+#![cfg_attr(target_arch = "wasm32", no_main)]
+#![cfg(not(target_arch = "wasm32"))]
+
 use std::path::Path;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};

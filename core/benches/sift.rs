@@ -3,6 +3,11 @@
 //! tests/scripts/bench_compare.sh; and the stage that costs most, the five blurs
 //! of the first octave (a 2482x752 plane), on their own.
 
+// criterion is a native dev-dependency: on wasm32 (`cargo clippy --all-targets
+// --target wasm32-unknown-unknown`) this bench is an empty program.
+#![cfg_attr(target_arch = "wasm32", no_main)]
+#![cfg(not(target_arch = "wasm32"))]
+
 use std::path::Path;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};

@@ -6,6 +6,11 @@
 //! matrix by RANSAC and recoverPose. `tests/scripts/compare_vo.py` times the
 //! whole loop against OpenCV's.
 
+// criterion is a native dev-dependency: on wasm32 (`cargo clippy --all-targets
+// --target wasm32-unknown-unknown`) this bench is an empty program.
+#![cfg_attr(target_arch = "wasm32", no_main)]
+#![cfg(not(target_arch = "wasm32"))]
+
 use std::path::Path;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
