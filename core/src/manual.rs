@@ -41,64 +41,28 @@ const DT_300: &str = "((226, 119), [(208, 115), (394, 52), (519, 213), (872, 160
 const ONE_MATCH_209: &str = "((226, 119), [(208, 115)], [72.02082824707031])";
 const NO_MATCH: &str = "((0, 0), [], [])";
 
+/// One row of [`EXAMPLES`]: `(task, algo, threshold, frame, feature, expected)`.
+const fn example(
+    task: &'static str,
+    algo: &'static str,
+    threshold: Option<f64>,
+    frame: usize,
+    feature: usize,
+    expected: &'static str,
+) -> ManualExample {
+    ManualExample { task, algo, threshold, frame, feature, expected }
+}
+
 /// The manual's examples, in its order (Task 1: dt, Task 2: nn, Task 3: nndr).
+#[rustfmt::skip]
 pub const EXAMPLES: [ManualExample; 7] = [
-    ManualExample {
-        task: "Task 1 (dt)",
-        algo: "dt",
-        threshold: Some(100.0),
-        frame: 150,
-        feature: 209,
-        expected: ONE_MATCH_209,
-    },
-    ManualExample {
-        task: "Task 1 (dt)",
-        algo: "dt",
-        threshold: Some(300.0),
-        frame: 150,
-        feature: 209,
-        expected: DT_300,
-    },
-    ManualExample {
-        task: "Task 2 (nn)",
-        algo: "nn",
-        threshold: None,
-        frame: 150,
-        feature: 209,
-        expected: ONE_MATCH_209,
-    },
-    ManualExample {
-        task: "Task 2 (nn)",
-        algo: "nn",
-        threshold: Some(100.0),
-        frame: 150,
-        feature: 209,
-        expected: ONE_MATCH_209,
-    },
-    ManualExample {
-        task: "Task 2 (nn)",
-        algo: "nn",
-        threshold: Some(50.0),
-        frame: 150,
-        feature: 209,
-        expected: NO_MATCH,
-    },
-    ManualExample {
-        task: "Task 3 (nndr)",
-        algo: "nndr",
-        threshold: Some(0.97),
-        frame: 120,
-        feature: 45,
-        expected: "((22, 14), [(61, 163)], [156.46725463867188])",
-    },
-    ManualExample {
-        task: "Task 3 (nndr)",
-        algo: "nndr",
-        threshold: Some(0.93),
-        frame: 120,
-        feature: 45,
-        expected: NO_MATCH,
-    },
+    example("Task 1 (dt)", "dt", Some(100.0), 150, 209, ONE_MATCH_209),
+    example("Task 1 (dt)", "dt", Some(300.0), 150, 209, DT_300),
+    example("Task 2 (nn)", "nn", None, 150, 209, ONE_MATCH_209),
+    example("Task 2 (nn)", "nn", Some(100.0), 150, 209, ONE_MATCH_209),
+    example("Task 2 (nn)", "nn", Some(50.0), 150, 209, NO_MATCH),
+    example("Task 3 (nndr)", "nndr", Some(0.97), 120, 45, "((22, 14), [(61, 163)], [156.46725463867188])"),
+    example("Task 3 (nndr)", "nndr", Some(0.93), 120, 45, NO_MATCH),
 ];
 
 /// The frames the examples need (each example matches `frame - 1` into `frame`).

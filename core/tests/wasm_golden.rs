@@ -10,10 +10,11 @@
 
 #![cfg(target_arch = "wasm32")]
 
+mod golden_data;
 mod json_mini;
 
 use siftlab_core::matching::{knn_match, match_feature, matching_info, Strategy};
-use siftlab_core::sift::{detect_and_compute, Features, KeyPoint, SiftParams};
+use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
 use siftlab_core::GrayImage;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen_test::*;
@@ -165,25 +166,8 @@ fn the_manuals_seven_examples_reproduce_in_the_browser() {
 
 /// OpenCV's own features (default-wheel golden) as `Features`.
 fn golden_features(golden: &[u8]) -> Features {
-    let n = u32_at(golden, 16) as usize;
-    let f = |o: usize| f32::from_bits(u32_at(golden, o));
-    let keypoints = (0..n)
-        .map(|i| {
-            let o = 20 + 24 * i;
-            KeyPoint {
-                x: f(o),
-                y: f(o + 4),
-                size: f(o + 8),
-                angle: f(o + 12),
-                response: f(o + 16),
-                octave: u32_at(golden, o + 20) as i32,
-            }
-        })
-        .collect();
-    let base = 20 + 24 * n;
-    let descriptors =
-        (0..n).map(|i| <[u8; 128]>::try_from(&golden[base + 128 * i..base + 128 * (i + 1)]).unwrap()).collect();
-    Features { keypoints, descriptors }
+    let g = golden_data::parse_golden(golden, "golden");
+    Features { keypoints: g.keypoints, descriptors: g.descriptors }
 }
 
 #[wasm_bindgen_test]
