@@ -421,19 +421,10 @@ mod tests {
         assert_eq!(row[2], 2884.9956);
     }
 
-    /// Deterministic pseudo-random descriptors (xorshift64).
+    /// Deterministic pseudo-random descriptors.
     fn random_descriptors(n: usize, seed: u64) -> Vec<[u8; 128]> {
-        let mut s = seed;
-        (0..n)
-            .map(|_| {
-                std::array::from_fn(|_| {
-                    s ^= s << 13;
-                    s ^= s >> 7;
-                    s ^= s << 17;
-                    (s >> 32) as u8
-                })
-            })
-            .collect()
+        let mut rng = crate::testutil::XorShift64::new(seed);
+        (0..n).map(|_| std::array::from_fn(|_| rng.byte())).collect()
     }
 
     /// Descriptors at the edges of the range: all 0, all 255, one byte

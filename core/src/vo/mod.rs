@@ -14,21 +14,6 @@ pub mod odometry;
 pub mod ransac;
 pub mod recover_pose;
 
-/// Test helpers shared by the stages' tests.
-#[cfg(test)]
-pub(crate) mod testing {
-    /// A xorshift64 stream of uniform f64 in [−1, 1).
-    pub fn uniform(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed;
-        move || {
-            s ^= s << 13;
-            s ^= s >> 7;
-            s ^= s << 17;
-            (s >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        }
-    }
-}
-
 pub use lk::{calc_optical_flow_pyr_lk, LkParams, LkResult};
 pub use odometry::{Odometry, StepResult, Steps};
 pub use ransac::{find_essential_mat, EssentialResult, RansacParams};

@@ -271,13 +271,8 @@ mod x86 {
                 return;
             }
             assert!(libm_hypot_is_glibcs(), "this libm's hypot is not glibc's Borges kernel");
-            let mut s = 0x0123_4567_89ab_cdefu64;
-            let mut next = move || {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                s
-            };
+            let mut rng = crate::testutil::XorShift64::new(0x0123_4567_89ab_cdef);
+            let mut next = move || rng.next_u64();
             let special = [0.0, -0.0, 5e-324, 1e-310, 2.2e-308, 1e-300, 1.0, 1e300, f64::MAX, f64::INFINITY, f64::NAN];
             for n in 0..400_000 {
                 let pick = |r: u64| -> f64 {
@@ -326,7 +321,7 @@ mod tests {
     /// sweeps and rotations.
     #[test]
     fn four_lanes_are_four_scalar_svds() {
-        let mut rnd = crate::vo::testing::uniform(0x2545_f491_4f6c_dd1d);
+        let mut rnd = crate::testutil::signed_units(0x2545_f491_4f6c_dd1d);
         let mut kinds = [0usize; 4];
         for n in 0..20_000 {
             let ms: [[[f64; 4]; 4]; 4] = std::array::from_fn(|l| match (n + l) % 4 {

@@ -200,7 +200,7 @@ mod tests {
         // with short distance thresholds to hit `Z < dist` both ways.
         let mut a: Vec<[f64; 2]> = p1.iter().map(|&p| cam.normalize(p)).collect();
         let mut b: Vec<[f64; 2]> = p2.iter().map(|&p| cam.normalize(p)).collect();
-        let mut rnd = crate::vo::testing::uniform(0x2545_f491_4f6c_dd1d);
+        let mut rnd = crate::testutil::signed_units(0x2545_f491_4f6c_dd1d);
         for _ in 0..2000 {
             let (x, y) = (rnd(), rnd() * 0.5);
             a.push([x, y]);

@@ -488,12 +488,10 @@ mod tests {
     /// noise makes gradients and residuals large enough to overflow the
     /// exactness bounds, smooth texture keeps them small.
     fn level(w: usize, h: usize, noise: u32, seed: u64) -> Level {
-        let mut s = seed;
+        let mut rng = crate::testutil::XorShift64::new(seed);
         let data = (0..w * h)
             .map(|i| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
+                let s = rng.next_u64();
                 let (x, y) = ((i % w) as f64, (i / w) as f64);
                 let smooth = 128.0 + 60.0 * (x * 0.11 + y * 0.07).sin() + 40.0 * (y * 0.13 - x * 0.05).cos();
                 let n = if noise == 0 { 0 } else { (s % (2 * noise as u64 + 1)) as i64 - noise as i64 };
@@ -512,13 +510,8 @@ mod tests {
             return;
         }
         let (w, h) = (160, 90);
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
+        let mut rng = crate::testutil::XorShift64::new(0x9e37_79b9_7f4a_7c15);
+        let mut rnd = move || rng.next_u64();
         let (mut exact_seen, mut replay_seen, mut tensor_replays) = (0, 0, 0);
         for (noise, cases) in [(0u32, 400), (12, 400), (90, 400), (255, 200)] {
             let prev = level(w, h, noise, 1 + noise as u64);

@@ -928,13 +928,11 @@ mod tests {
 
     /// w×h pixels of xorshift noise, two thirds of them 0 or 255, so the
     /// 16-bit sums of the fast paths reach their bounds.
-    fn extreme_noise(w: usize, h: usize, seed: u32) -> Vec<u8> {
-        let mut s = seed;
+    fn extreme_noise(w: usize, h: usize, seed: u64) -> Vec<u8> {
+        let mut rng = crate::testutil::XorShift64::new(seed);
         (0..w * h)
             .map(|_| {
-                s ^= s << 13;
-                s ^= s >> 17;
-                s ^= s << 5;
+                let s = rng.next_u64();
                 [0, 255, (s >> 8) as u8][(s % 3) as usize]
             })
             .collect()
@@ -944,7 +942,7 @@ mod tests {
     fn pyr_down_fast_paths_match_the_definition() {
         for (w, h) in [(40, 3), (41, 4), (55, 9), (72, 21), (1241, 376), (621, 188), (311, 94), (7, 5), (1, 1), (2, 3)]
         {
-            let src = extreme_noise(w, h, 0x9e37_79b9 ^ (w * h) as u32);
+            let src = extreme_noise(w, h, 0x9e37_79b9 ^ (w * h) as u64);
             let want = pyr_down_reference(&src, w, h);
             assert_eq!(pyr_down(&src, w, h).0, want, "{w}x{h}");
             assert_eq!(pyr_down_portable(&src, w, h).0, want, "{w}x{h} portable");
@@ -974,7 +972,7 @@ mod tests {
     #[test]
     fn scharr_fast_path_matches_the_portable_one() {
         for (w, h) in [(1241, 376), (156, 47), (3, 2), (2, 1)] {
-            let lvl = Level::new(extreme_noise(w, h, 0x2468_ace1 ^ (w * h) as u32), w, h);
+            let lvl = Level::new(extreme_noise(w, h, 0x2468_ace1 ^ (w * h) as u64), w, h);
             let (fast, portable) = (Deriv::new(&lvl), Deriv::compute(&lvl));
             assert!(fast.ix == portable.ix && fast.iy == portable.iy, "{w}x{h}");
         }
