@@ -3,11 +3,10 @@
 //! candidates in OpenCV's order, DLT triangulation and the cheirality /
 //! distance (50) votes of every point (the lab passes no mask).
 
+use super::camera::Camera;
 #[cfg(test)]
 use super::linalg::null_vector_4x4;
-use super::linalg::svd;
-use super::null_vectors::null_vectors_4x4;
-use super::{det3, mat_mul, Camera, Mat3, Vec3};
+use super::linalg::{det3, mat_mul, null_vectors_4x4, svd, Mat3, Vec3};
 use crate::{Error, Result};
 
 /// recoverPose's default `distanceThresh`.
@@ -142,10 +141,9 @@ pub fn recover_pose(e: &Mat3, points1: &[[f32; 2]], points2: &[[f32; 2]], cam: &
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vo::five_point::tests::{rodrigues, scene};
-    use crate::vo::ransac::tests::{golden_points, SCENE_R, SCENE_T};
+    use crate::vo::linalg::skew;
     use crate::vo::ransac::{find_essential_mat, RansacParams};
-    use crate::vo::{mat_mul, skew};
+    use crate::vo::testing::{golden_points, rodrigues, scene, SCENE_R, SCENE_T};
 
     #[test]
     fn recovers_r_and_t_from_the_true_essential_matrix() {
