@@ -6,6 +6,10 @@
 //! scores a trajectory against ground truth. [`linalg`] holds the numeric
 //! routines they share (OpenCV's Jacobi SVD, LU inverse, `solvePoly`, `cv::RNG`).
 
+// Every unsafe operation sits in its own `unsafe` block with the reason it
+// holds, also inside `unsafe fn`s.
+#![deny(unsafe_op_in_unsafe_fn)]
+
 mod camera;
 pub mod five_point;
 pub mod linalg;

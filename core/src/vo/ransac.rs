@@ -116,19 +116,22 @@ fn sampson_errors(e: &Mat3, pts: &Columns, t: f32, err: &mut Vec<f32>) -> usize 
     err.resize(pts.x1.len(), 0.0);
     #[cfg(target_arch = "x86_64")]
     {
+        // The same loop compiled for wider vectors: each lane still does
+        // OpenCV's unfused scalar operations, so only the speed changes.
         #[target_feature(enable = "avx512f")]
-        unsafe fn avx512(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
+        fn avx512(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
             body(e, pts, t, err)
         }
         #[target_feature(enable = "avx2")]
-        unsafe fn avx2(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
+        fn avx2(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
             body(e, pts, t, err)
         }
-        // SAFETY (both): the CPU has the one feature the function enables.
         if crate::simd::avx512f() {
+            // SAFETY: the CPU has AVX-512 F, the one feature the function enables.
             return unsafe { avx512(e, pts, t, err) };
         }
         if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2, the one feature the function enables.
             return unsafe { avx2(e, pts, t, err) };
         }
     }

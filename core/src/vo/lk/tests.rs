@@ -112,9 +112,9 @@ fn avx2_equals_portable_on_a_kitti_sized_pair() {
     let tracked = fast.status.iter().filter(|&&s| s).count();
     assert!(tracked > 400, "only {tracked} of {} tracked", pts.len());
     assert_eq!(fast.status, portable.status);
-    for i in 0..pts.len() {
+    for (i, p) in pts.iter().enumerate() {
         let bits = |r: &LkResult| [r.next_pts[i][0].to_bits(), r.next_pts[i][1].to_bits()];
-        assert_eq!(bits(&fast), bits(&portable), "point {i} {:?}", pts[i]);
+        assert_eq!(bits(&fast), bits(&portable), "point {i} {p:?}");
         if fast.status[i] {
             assert_eq!(fast.err[i].to_bits(), portable.err[i].to_bits(), "err of point {i}");
         }

@@ -106,24 +106,14 @@ fn jacobi_impl(at: &mut [f64], m: usize, n: usize, n1: usize, w: &mut [f64], vt:
         w[i] = sd.sqrt();
     }
 
-    // Selection sort, descending; only a strictly greater value moves the pick.
-    for i in 0..n.saturating_sub(1) {
-        let mut j = i;
-        for k in i + 1..n {
-            if w[j] < w[k] {
-                j = k;
-            }
+    sort_descending(&mut w[..n], |i, j| {
+        for k in 0..m {
+            at.swap(i * m + k, j * m + k);
         }
-        if i != j {
-            w.swap(i, j);
-            for k in 0..m {
-                at.swap(i * m + k, j * m + k);
-            }
-            for k in 0..n {
-                vt.swap(i * n + k, j * n + k);
-            }
+        for k in 0..n {
+            vt.swap(i * n + k, j * n + k);
         }
-    }
+    });
 
     // Normalize the data vectors and generate the missing ones from a seeded
     // random vector orthogonalized against the previous ones (this is what
@@ -166,6 +156,26 @@ fn jacobi_impl(at: &mut [f64], m: usize, n: usize, n1: usize, w: &mut [f64], vt:
         let s = if sd > minval { 1.0 / sd } else { 0.0 };
         for k in 0..m {
             at[i * m + k] *= s;
+        }
+    }
+}
+
+/// JacobiSVD's selection sort of the singular values, descending: only a
+/// strictly greater value moves the pick, so the first of equal maxima
+/// wins. `swap(i, j)` moves what goes with values i and j.
+#[inline(always)]
+fn sort_descending(w: &mut [f64], mut swap: impl FnMut(usize, usize)) {
+    let n = w.len();
+    for i in 0..n.saturating_sub(1) {
+        let mut j = i;
+        for k in i + 1..n {
+            if w[j] < w[k] {
+                j = k;
+            }
+        }
+        if i != j {
+            w.swap(i, j);
+            swap(i, j);
         }
     }
 }

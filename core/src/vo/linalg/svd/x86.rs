@@ -13,7 +13,7 @@ use std::arch::x86_64::*;
 /// vector `hypot` below reproduces. Checked once on inputs where glibc's
 /// older `__ieee754_hypot` and an FMA build round differently from it;
 /// anywhere else the four SVDs run one by one.
-pub fn libm_hypot_is_glibcs() -> bool {
+pub(super) fn libm_hypot_is_glibcs() -> bool {
     static SAME: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
     *SAME.get_or_init(|| {
         let mut s = 0x9e37_79b9_7f4a_7c15u64;
@@ -30,24 +30,43 @@ pub fn libm_hypot_is_glibcs() -> bool {
     })
 }
 
+/// The vector `hypot` of four lane pairs, all lanes live.
 #[target_feature(enable = "avx2")]
-unsafe fn hypot_lanes(x: [f64; 4], y: [f64; 4]) -> [f64; 4] {
+fn hypot_lanes(x: [f64; 4], y: [f64; 4]) -> [f64; 4] {
     let all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-    let r = hypot(_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(y.as_ptr()), all);
-    let mut out = [0.0; 4];
-    _mm256_storeu_pd(out.as_mut_ptr(), r);
-    out
+    // SAFETY: this function runs with AVX2, all `hypot` needs.
+    lanes(unsafe { hypot(from_lanes(&x), from_lanes(&y), all) })
 }
 
-#[inline(always)]
-unsafe fn splat(v: f64) -> __m256d {
+#[target_feature(enable = "avx2")]
+#[inline]
+fn splat(v: f64) -> __m256d {
     _mm256_set1_pd(v)
 }
 
 /// `lane ? b : a`, lane by lane (`mask` all ones or all zeros).
-#[inline(always)]
-unsafe fn select(mask: __m256d, a: __m256d, b: __m256d) -> __m256d {
+#[target_feature(enable = "avx2")]
+#[inline]
+fn select(mask: __m256d, a: __m256d, b: __m256d) -> __m256d {
     _mm256_blendv_pd(a, b, mask)
+}
+
+/// The four lanes of `v`.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn lanes(v: __m256d) -> [f64; 4] {
+    let mut out = [0.0; 4];
+    // SAFETY: 4 f64 into a [f64; 4]; an unaligned store.
+    unsafe { _mm256_storeu_pd(out.as_mut_ptr(), v) };
+    out
+}
+
+/// A vector of the four values.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn from_lanes(v: &[f64; 4]) -> __m256d {
+    // SAFETY: 4 f64 from a [f64; 4]; an unaligned load.
+    unsafe { _mm256_loadu_pd(v.as_ptr()) }
 }
 
 /// glibc 2.35+'s `__hypot` (sysdeps/ieee754/dbl-64/e_hypot.c, the kernel
@@ -56,54 +75,60 @@ unsafe fn select(mask: __m256d, a: __m256d, b: __m256d) -> __m256d {
 /// outside it (zeros, NaN, extreme magnitudes) are handed to the C
 /// library one by one, those of `live` only (the others' results are
 /// thrown away).
+///
+/// # Safety
+/// The CPU must have AVX2. (Not a `#[target_feature]` function, so that it
+/// can be `#[inline(always)]` into the SVD's inner loop.)
 #[inline(always)]
 unsafe fn hypot(x: __m256d, y: __m256d, live: __m256d) -> __m256d {
-    let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
-    let (x, y) = (_mm256_and_pd(x, abs), _mm256_and_pd(y, abs));
-    // ax = x < y ? y : x; ay = x < y ? x : y.
-    let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(x, y);
-    let (ax, ay) = (select(lt, x, y), select(lt, y, x));
-    let two = splat(2.0);
-    // kernel(ax, ay): h = sqrt(ax² + ay²), then Borges' correction.
-    let h = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(ax, ax), _mm256_mul_pd(ay, ay)));
-    let near = _mm256_cmp_pd::<_CMP_LE_OQ>(h, _mm256_mul_pd(two, ay));
-    // h <= 2·ay: δ = h − ay, t1 = ax·(2δ − ax), t2 = (δ − 2(ax − ay))·δ.
-    let d_near = _mm256_sub_pd(h, ay);
-    let t1_near = _mm256_mul_pd(ax, _mm256_sub_pd(_mm256_mul_pd(two, d_near), ax));
-    let t2_near = _mm256_mul_pd(_mm256_sub_pd(d_near, _mm256_mul_pd(two, _mm256_sub_pd(ax, ay))), d_near);
-    // else: δ = h − ax, t1 = 2δ·(ax − 2ay), t2 = (4δ − ay)·ay + δ·δ.
-    let d_far = _mm256_sub_pd(h, ax);
-    let t1_far = _mm256_mul_pd(_mm256_mul_pd(two, d_far), _mm256_sub_pd(ax, _mm256_mul_pd(two, ay)));
-    let t2_far = _mm256_add_pd(
-        _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(splat(4.0), d_far), ay), ay),
-        _mm256_mul_pd(d_far, d_far),
-    );
-    let (t1, t2) = (select(near, t1_far, t1_near), select(near, t2_far, t2_near));
-    let kernel = _mm256_sub_pd(h, _mm256_div_pd(_mm256_add_pd(t1, t2), _mm256_mul_pd(two, h)));
-    // ay <= ax·2^-54: ax + ay (ay is below half an ulp of ax).
-    let widely = _mm256_cmp_pd::<_CMP_LE_OQ>(ay, _mm256_mul_pd(ax, splat(f64::from_bits(0x3c90_0000_0000_0000))));
-    let r = select(widely, kernel, _mm256_add_pd(ax, ay));
-    // The common case: ax <= 2^511 and ay >= 2^-459 (false for NaN;
-    // an infinite ax fails the first test).
-    let common = _mm256_and_pd(
-        _mm256_cmp_pd::<_CMP_LE_OQ>(ax, splat(f64::from_bits(0x5fe0_0000_0000_0000))),
-        _mm256_cmp_pd::<_CMP_GE_OQ>(ay, splat(f64::from_bits(0x2340_0000_0000_0000))),
-    );
-    let common = _mm256_or_pd(common, _mm256_xor_pd(live, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))));
-    if _mm256_movemask_pd(common) == 0b1111 {
-        return r;
-    }
-    let (mut xs, mut ys, mut rs) = ([0.0; 4], [0.0; 4], [0.0; 4]);
-    _mm256_storeu_pd(xs.as_mut_ptr(), x);
-    _mm256_storeu_pd(ys.as_mut_ptr(), y);
-    _mm256_storeu_pd(rs.as_mut_ptr(), r);
-    let m = _mm256_movemask_pd(common);
-    for l in 0..4 {
-        if m >> l & 1 == 0 {
-            rs[l] = xs[l].hypot(ys[l]);
+    // SAFETY: the caller vouches for AVX2, the feature of every intrinsic
+    // and helper called here; memory is touched only through `lanes` and
+    // `from_lanes` on local arrays.
+    unsafe {
+        let abs = _mm256_castsi256_pd(_mm256_set1_epi64x(i64::MAX));
+        let (x, y) = (_mm256_and_pd(x, abs), _mm256_and_pd(y, abs));
+        // ax = x < y ? y : x; ay = x < y ? x : y.
+        let lt = _mm256_cmp_pd::<_CMP_LT_OQ>(x, y);
+        let (ax, ay) = (select(lt, x, y), select(lt, y, x));
+        let two = splat(2.0);
+        // kernel(ax, ay): h = sqrt(ax² + ay²), then Borges' correction.
+        let h = _mm256_sqrt_pd(_mm256_add_pd(_mm256_mul_pd(ax, ax), _mm256_mul_pd(ay, ay)));
+        let near = _mm256_cmp_pd::<_CMP_LE_OQ>(h, _mm256_mul_pd(two, ay));
+        // h <= 2·ay: δ = h − ay, t1 = ax·(2δ − ax), t2 = (δ − 2(ax − ay))·δ.
+        let d_near = _mm256_sub_pd(h, ay);
+        let t1_near = _mm256_mul_pd(ax, _mm256_sub_pd(_mm256_mul_pd(two, d_near), ax));
+        let t2_near = _mm256_mul_pd(_mm256_sub_pd(d_near, _mm256_mul_pd(two, _mm256_sub_pd(ax, ay))), d_near);
+        // else: δ = h − ax, t1 = 2δ·(ax − 2ay), t2 = (4δ − ay)·ay + δ·δ.
+        let d_far = _mm256_sub_pd(h, ax);
+        let t1_far = _mm256_mul_pd(_mm256_mul_pd(two, d_far), _mm256_sub_pd(ax, _mm256_mul_pd(two, ay)));
+        let t2_far = _mm256_add_pd(
+            _mm256_mul_pd(_mm256_sub_pd(_mm256_mul_pd(splat(4.0), d_far), ay), ay),
+            _mm256_mul_pd(d_far, d_far),
+        );
+        let (t1, t2) = (select(near, t1_far, t1_near), select(near, t2_far, t2_near));
+        let kernel = _mm256_sub_pd(h, _mm256_div_pd(_mm256_add_pd(t1, t2), _mm256_mul_pd(two, h)));
+        // ay <= ax·2^-54: ax + ay (ay is below half an ulp of ax).
+        let widely = _mm256_cmp_pd::<_CMP_LE_OQ>(ay, _mm256_mul_pd(ax, splat(f64::from_bits(0x3c90_0000_0000_0000))));
+        let r = select(widely, kernel, _mm256_add_pd(ax, ay));
+        // The common case: ax <= 2^511 and ay >= 2^-459 (false for NaN;
+        // an infinite ax fails the first test).
+        let common = _mm256_and_pd(
+            _mm256_cmp_pd::<_CMP_LE_OQ>(ax, splat(f64::from_bits(0x5fe0_0000_0000_0000))),
+            _mm256_cmp_pd::<_CMP_GE_OQ>(ay, splat(f64::from_bits(0x2340_0000_0000_0000))),
+        );
+        let common = _mm256_or_pd(common, _mm256_xor_pd(live, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))));
+        if _mm256_movemask_pd(common) == 0b1111 {
+            return r;
         }
+        let (xs, ys, mut rs) = (lanes(x), lanes(y), lanes(r));
+        let m = _mm256_movemask_pd(common);
+        for l in 0..4 {
+            if m >> l & 1 == 0 {
+                rs[l] = xs[l].hypot(ys[l]);
+            }
+        }
+        from_lanes(&rs)
     }
-    _mm256_loadu_pd(rs.as_ptr())
 }
 
 /// Rows i < j of `m`, both mutable.
@@ -120,7 +145,7 @@ fn split_pair(m: &mut [[__m256d; 4]; 4], i: usize, j: usize) -> (&mut [__m256d; 
 /// changed nothing leaves the state as it was, so it changes nothing
 /// again: the lane's values stay exactly the scalar ones.
 #[target_feature(enable = "avx2")]
-pub unsafe fn null_vectors_avx2(ms: &[[[f64; 4]; 4]; 4]) -> [[f64; 4]; 4] {
+pub(super) fn null_vectors_avx2(ms: &[[[f64; 4]; 4]; 4]) -> [[f64; 4]; 4] {
     // at[i][k] = column i of A, element k; lane l = matrix l.
     let mut at = [[_mm256_setzero_pd(); 4]; 4];
     for (i, col) in at.iter_mut().enumerate() {
@@ -160,7 +185,9 @@ pub unsafe fn null_vectors_avx2(ms: &[[[f64; 4]; 4]; 4]) -> [[f64; 4]; 4] {
                 }
                 let p = _mm256_mul_pd(p, two);
                 let beta = _mm256_sub_pd(a, b);
-                let gamma = hypot(p, beta, _mm256_xor_pd(skip, _mm256_castsi256_pd(_mm256_set1_epi64x(-1))));
+                let live = _mm256_xor_pd(skip, _mm256_castsi256_pd(_mm256_set1_epi64x(-1)));
+                // SAFETY: this function runs with AVX2, all `hypot` needs.
+                let gamma = unsafe { hypot(p, beta, live) };
                 // beta < 0: δ = (γ − β)·0.5, s = sqrt(δ/γ), c = p/(γ·s·2);
                 // else c = sqrt((γ + β)/(γ·2)), s = p/(γ·c·2).
                 let neg = _mm256_cmp_pd::<_CMP_LT_OQ>(beta, zero);
@@ -209,33 +236,12 @@ pub unsafe fn null_vectors_avx2(ms: &[[[f64; 4]; 4]; 4]) -> [[f64; 4]; 4] {
     // Singular values, then each lane's selection sort (descending, a
     // strictly greater value moves the pick): the row of Vᵀ that ends
     // last is the null vector.
-    let sv: [[f64; 4]; 4] = std::array::from_fn(|i| {
-        let mut out = [0.0; 4];
-        _mm256_storeu_pd(out.as_mut_ptr(), _mm256_sqrt_pd(dot(&at[i], &at[i])));
-        out
-    });
-    let vts: [[[f64; 4]; 4]; 4] = std::array::from_fn(|i| {
-        std::array::from_fn(|k| {
-            let mut out = [0.0; 4];
-            _mm256_storeu_pd(out.as_mut_ptr(), vt[i][k]);
-            out
-        })
-    });
+    let sv: [[f64; 4]; 4] = std::array::from_fn(|i| lanes(_mm256_sqrt_pd(dot(&at[i], &at[i]))));
+    let vts: [[[f64; 4]; 4]; 4] = std::array::from_fn(|i| std::array::from_fn(|k| lanes(vt[i][k])));
     std::array::from_fn(|l| {
         let mut w = [sv[0][l], sv[1][l], sv[2][l], sv[3][l]];
         let mut row = [0, 1, 2, 3];
-        for i in 0..3 {
-            let mut j = i;
-            for k in i + 1..4 {
-                if w[j] < w[k] {
-                    j = k;
-                }
-            }
-            if i != j {
-                w.swap(i, j);
-                row.swap(i, j);
-            }
-        }
+        super::sort_descending(&mut w, |i, j| row.swap(i, j));
         std::array::from_fn(|k| vts[row[3]][k][l])
     })
 }
