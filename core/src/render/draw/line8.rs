@@ -2,7 +2,7 @@
 //! integer points, for thickness 1 without a shift) and `Line2` (between
 //! fixed-point points, for polygon outlines).
 
-use super::clip::clip_line;
+use super::clip::{clip_line, Walk};
 use super::pixel::{put, XY_ONE, XY_SHIFT};
 use image::{Rgb, RgbImage};
 
@@ -43,53 +43,24 @@ pub(super) fn line8(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u
 
 /// OpenCV's `Line2`: a LINE_8 line between XY_SHIFT fixed-point points
 /// (used for polygon edges), end pixel rounded, every pixel bounds-checked.
+/// Walked once along the major axis ([`Walk`]).
 pub(super) fn line2(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
     let (w, h) = (img.width() as i64, img.height() as i64);
-    let (mut pt1, mut pt2) = (p1, p2);
-    if !clip_line(w << XY_SHIFT, h << XY_SHIFT, &mut pt1, &mut pt2) {
+    let Some(walk) = Walk::new(w, h, p1, p2) else {
         return;
-    }
-    let (mut dx, mut dy) = (pt2.0 - pt1.0, pt2.1 - pt1.1);
-    let j: i64 = if dx < 0 { -1 } else { 0 };
-    let ax = (dx ^ j) - j;
-    let i: i64 = if dy < 0 { -1 } else { 0 };
-    let ay = (dy ^ i) - i;
-    let (x_step, y_step, mut ecount);
-    if ax > ay {
-        dy = (dy ^ j) - j;
-        if j != 0 {
-            std::mem::swap(&mut pt1, &mut pt2);
-        }
-        x_step = XY_ONE;
-        y_step = (dy << XY_SHIFT) / (ax | 1);
-        ecount = (pt2.0 - pt1.0) >> XY_SHIFT;
-    } else {
-        dx = (dx ^ i) - i;
-        if i != 0 {
-            std::mem::swap(&mut pt1, &mut pt2);
-        }
-        x_step = (dx << XY_SHIFT) / (ay | 1);
-        y_step = XY_ONE;
-        ecount = (pt2.1 - pt1.1) >> XY_SHIFT;
-    }
-    pt1.0 += XY_ONE >> 1;
-    pt1.1 += XY_ONE >> 1;
-    put(img, (pt2.0 + (XY_ONE >> 1)) >> XY_SHIFT, (pt2.1 + (XY_ONE >> 1)) >> XY_SHIFT, c);
-    if ax > ay {
-        pt1.0 >>= XY_SHIFT;
-        while ecount >= 0 {
-            put(img, pt1.0, pt1.1 >> XY_SHIFT, c);
-            pt1.0 += 1;
-            pt1.1 += y_step;
-            ecount -= 1;
-        }
-    } else {
-        pt1.1 >>= XY_SHIFT;
-        while ecount >= 0 {
-            put(img, pt1.0 >> XY_SHIFT, pt1.1, c);
-            pt1.0 += x_step;
-            pt1.1 += 1;
-            ecount -= 1;
-        }
+    };
+    let (a, b) = (walk.a, walk.b);
+    let mut ecount = (b.0 - a.0) >> XY_SHIFT;
+    let mut v = a.1 + (XY_ONE >> 1);
+    // OpenCV plots the rounded end point first, then walks from the start.
+    let (x, y) = walk.xy(((b.0 + (XY_ONE >> 1)) >> XY_SHIFT, (b.1 + (XY_ONE >> 1)) >> XY_SHIFT));
+    put(img, x, y, c);
+    let mut u = (a.0 + (XY_ONE >> 1)) >> XY_SHIFT;
+    while ecount >= 0 {
+        let (x, y) = walk.xy((u, v >> XY_SHIFT));
+        put(img, x, y, c);
+        u += 1;
+        v += walk.v_step;
+        ecount -= 1;
     }
 }

@@ -1,7 +1,7 @@
 //! OpenCV's `LineAA`: a 3-pixel-wide, Gaussian-filtered anti-aliased line
 //! between fixed-point points (the LINE_AA of `drawMatchesKnn`).
 
-use super::clip::clip_line;
+use super::clip::Walk;
 use super::pixel::{XY_ONE, XY_SHIFT};
 use image::{Rgb, RgbImage};
 
@@ -38,49 +38,19 @@ fn blend_aa(img: &mut RgbImage, x: i64, y: i64, c: Rgb<u8>, a: i64) {
 /// points in XY_SHIFT fixed point, with its end-point coverage table. The
 /// segment is clipped to the image and every pixel of the footprint is
 /// bounds-checked (OpenCV 4.x; older releases clipped 2 pixels inside).
+/// Walked once along the major axis ([`Walk`]).
 pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
     let (w, h) = (img.width() as i64, img.height() as i64);
-    let (mut pt1, mut pt2) = (p1, p2);
-    if !clip_line(w << XY_SHIFT, h << XY_SHIFT, &mut pt1, &mut pt2) {
+    let Some(walk) = Walk::new(w, h, p1, p2) else {
         return;
-    }
-    let (mut dx, mut dy) = (pt2.0 - pt1.0, pt2.1 - pt1.1);
-    let mut j: i64 = if dx < 0 { -1 } else { 0 };
-    let ax = (dx ^ j) - j;
-    let mut i: i64 = if dy < 0 { -1 } else { 0 };
-    let ay = (dy ^ i) - i;
-    let (x_step, y_step, mut ecount, slope0);
-    if ax > ay {
-        dy = (dy ^ j) - j;
-        if j != 0 {
-            std::mem::swap(&mut pt1, &mut pt2);
-        }
-        x_step = XY_ONE;
-        y_step = (dy << XY_SHIFT) / (ax | 1);
-        pt2.0 += XY_ONE;
-        ecount = (pt2.0 >> XY_SHIFT) - (pt1.0 >> XY_SHIFT);
-        j = -(pt1.0 & (XY_ONE - 1));
-        pt1.1 += ((y_step * j) >> XY_SHIFT) + (XY_ONE >> 1);
-        let s = (y_step >> (XY_SHIFT - 5)) & 0x3f;
-        slope0 = s ^ if y_step < 0 { 0x3f } else { 0 };
-        i = (pt1.0 >> (XY_SHIFT - 7)) & 0x78;
-        j = (pt2.0 >> (XY_SHIFT - 7)) & 0x78;
-    } else {
-        dx = (dx ^ i) - i;
-        if i != 0 {
-            std::mem::swap(&mut pt1, &mut pt2);
-        }
-        x_step = (dx << XY_SHIFT) / (ay | 1);
-        y_step = XY_ONE;
-        pt2.1 += XY_ONE;
-        ecount = (pt2.1 >> XY_SHIFT) - (pt1.1 >> XY_SHIFT);
-        j = -(pt1.1 & (XY_ONE - 1));
-        pt1.0 += ((x_step * j) >> XY_SHIFT) + (XY_ONE >> 1);
-        let s = (x_step >> (XY_SHIFT - 5)) & 0x3f;
-        slope0 = s ^ if x_step < 0 { 0x3f } else { 0 };
-        i = (pt1.1 >> (XY_SHIFT - 7)) & 0x78;
-        j = (pt2.1 >> (XY_SHIFT - 7)) & 0x78;
-    }
+    };
+    let (mut a, mut b, v_step) = (walk.a, walk.b, walk.v_step);
+    b.0 += XY_ONE;
+    let mut ecount = (b.0 >> XY_SHIFT) - (a.0 >> XY_SHIFT);
+    a.1 += ((v_step * -(a.0 & (XY_ONE - 1))) >> XY_SHIFT) + (XY_ONE >> 1);
+    let slope0 = ((v_step >> (XY_SHIFT - 5)) & 0x3f) ^ if v_step < 0 { 0x3f } else { 0 };
+    let i = (a.0 >> (XY_SHIFT - 7)) & 0x78;
+    let j = (b.0 >> (XY_SHIFT - 7)) & 0x78;
     let slope = if slope0 & 0x20 != 0 { 0x100 } else { SLOPE_CORR[slope0 as usize] };
     // End-point correction: partial coverage of the first and last two
     // pixels from the 4-bit sub-pixel fractions of the ends.
@@ -101,33 +71,19 @@ pub fn line_aa(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>) {
     }
     let mut scount: i64 = 0;
     let sel = |n: i64| ((n >= 2) as i64 + 1) & (n | 2);
-    if ax > ay {
-        let mut x = pt1.0 >> XY_SHIFT;
-        while ecount >= 0 {
-            let y = (pt1.1 >> XY_SHIFT) - 1;
-            let ep_corr = ep[(sel(scount) * 3 + sel(ecount)) as usize];
-            let dist = ((pt1.1 >> (XY_SHIFT - 5)) & 31) as usize;
-            blend_aa(img, x, y, c, ((ep_corr * FILTER[dist + 32]) >> 8) & 0xff);
-            blend_aa(img, x, y + 1, c, ((ep_corr * FILTER[dist]) >> 8) & 0xff);
-            blend_aa(img, x, y + 2, c, ((ep_corr * FILTER[63 - dist]) >> 8) & 0xff);
-            pt1.1 += y_step;
-            x += 1;
-            scount += 1;
-            ecount -= 1;
+    let mut u = a.0 >> XY_SHIFT;
+    while ecount >= 0 {
+        // The three pixels across the line at v − 1, v, v + 1.
+        let v = (a.1 >> XY_SHIFT) - 1;
+        let ep_corr = ep[(sel(scount) * 3 + sel(ecount)) as usize];
+        let dist = ((a.1 >> (XY_SHIFT - 5)) & 31) as usize;
+        for (k, f) in [FILTER[dist + 32], FILTER[dist], FILTER[63 - dist]].into_iter().enumerate() {
+            let (x, y) = walk.xy((u, v + k as i64));
+            blend_aa(img, x, y, c, ((ep_corr * f) >> 8) & 0xff);
         }
-    } else {
-        let mut y = pt1.1 >> XY_SHIFT;
-        while ecount >= 0 {
-            let x = (pt1.0 >> XY_SHIFT) - 1;
-            let ep_corr = ep[(sel(scount) * 3 + sel(ecount)) as usize];
-            let dist = ((pt1.0 >> (XY_SHIFT - 5)) & 31) as usize;
-            blend_aa(img, x, y, c, ((ep_corr * FILTER[dist + 32]) >> 8) & 0xff);
-            blend_aa(img, x + 1, y, c, ((ep_corr * FILTER[dist]) >> 8) & 0xff);
-            blend_aa(img, x + 2, y, c, ((ep_corr * FILTER[63 - dist]) >> 8) & 0xff);
-            pt1.0 += x_step;
-            y += 1;
-            scount += 1;
-            ecount -= 1;
-        }
+        a.1 += v_step;
+        u += 1;
+        scount += 1;
+        ecount -= 1;
     }
 }

@@ -199,22 +199,21 @@ pub fn svd(a: &[f64], m: usize, n: usize, full: bool) -> Svd {
     jacobi_impl(&mut at, len, count, n1, &mut w, &mut v);
     if transposed {
         // Vᵀ = the working vectors as rows, U = Vᵀ_workᵀ.
-        let mut u = vec![0.0; count * count];
-        for i in 0..count {
-            for k in 0..count {
-                u[k * count + i] = v[i * count + k];
-            }
-        }
-        Svd { w, u, ucols: count, vt: at, vrows: n1 }
+        Svd { w, u: transposed_rows(&v, count, count), ucols: count, vt: at, vrows: n1 }
     } else {
-        let mut u = vec![0.0; len * n1];
-        for i in 0..n1 {
-            for k in 0..len {
-                u[k * n1 + i] = at[i * len + k];
-            }
-        }
-        Svd { w, u, ucols: n1, vt: v, vrows: count }
+        Svd { w, u: transposed_rows(&at, n1, len), ucols: n1, vt: v, vrows: count }
     }
+}
+
+/// The `rows`×`len` row-major matrix `a` transposed (`len`×`rows`).
+fn transposed_rows(a: &[f64], rows: usize, len: usize) -> Vec<f64> {
+    let mut t = vec![0.0; rows * len];
+    for i in 0..rows {
+        for k in 0..len {
+            t[k * rows + i] = a[i * len + k];
+        }
+    }
+    t
 }
 
 /// The right singular vector of the smallest singular value of a 4×4 matrix
