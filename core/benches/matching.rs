@@ -7,23 +7,15 @@
 #![cfg_attr(target_arch = "wasm32", no_main)]
 #![cfg(not(target_arch = "wasm32"))]
 
-use std::path::Path;
+mod common;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use siftlab_core::matching::{knn_match, match_all, match_feature, Strategy};
 use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
-use siftlab_core::GrayImage;
 
-/// SIFT of frame `id` of `$SIFTLAB_BENCH_DATASET` (default: the bundled KITTI frames);
-/// bench_compare.sh points OpenCV at the same dataset.
-fn features(id: u32) -> Features {
-    let ds = std::env::var_os("SIFTLAB_BENCH_DATASET")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI"));
-    let p = ds.join(format!("gray/00/image_0/{id:06}.png"));
-    let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    let img = GrayImage::decode(&bytes).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    detect_and_compute(&img, &SiftParams::for_host())
+/// SIFT of frame `id` of the bench dataset.
+fn features(id: usize) -> Features {
+    detect_and_compute(&common::frame(id), &SiftParams::for_host())
 }
 
 /// Every query feature through `strategy` on this thread only, for the comparison with

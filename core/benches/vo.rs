@@ -11,25 +11,15 @@
 #![cfg_attr(target_arch = "wasm32", no_main)]
 #![cfg(not(target_arch = "wasm32"))]
 
-use std::path::Path;
+mod common;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use siftlab_core::sift::{detect, SiftParams};
 use siftlab_core::vo::lk::calc_optical_flow_pyr_lk_portable;
 use siftlab_core::vo::{calc_optical_flow_pyr_lk, find_essential_mat, recover_pose, Camera, LkParams, RansacParams};
-use siftlab_core::GrayImage;
-
-fn load(id: usize) -> GrayImage {
-    let ds = std::env::var_os("SIFTLAB_BENCH_DATASET")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI"));
-    let p = ds.join(format!("gray/00/image_0/{id:06}.png"));
-    let bytes = std::fs::read(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
-    GrayImage::decode(&bytes).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
 
 fn bench_vo(c: &mut Criterion) {
-    let (prev, next) = (load(0), load(1));
+    let (prev, next) = (common::frame(0), common::frame(1));
     let params = SiftParams::for_host();
     let pts: Vec<[f32; 2]> = detect(&prev, &params).iter().map(|k| [k.x, k.y]).collect();
     let lk = LkParams::default();

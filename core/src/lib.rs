@@ -20,6 +20,8 @@ pub mod pyfmt;
 pub mod render;
 pub mod sift;
 pub mod simd;
+#[cfg(test)]
+mod testutil;
 pub mod vo;
 
 pub use error::{Error, Result};

@@ -10,11 +10,12 @@
 
 #![cfg(target_arch = "wasm32")]
 
-mod golden_data;
+#[path = "golden_data/format.rs"]
+mod golden_format;
 mod json_mini;
 
 use siftlab_core::matching::{knn_match, match_feature, matching_info, Strategy};
-use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
+use siftlab_core::sift::{detect_and_compute, Features, KeyPoint, SiftParams};
 use siftlab_core::GrayImage;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen_test::*;
@@ -53,46 +54,27 @@ const MANUAL_FRAMES: [(usize, &[u8]); 4] = [
 
 /// The SIMD width OpenCV's SIFT kernels ran with where the goldens were written (docs/fidelity.md §SIFT-13).
 fn golden_lanes() -> usize {
-    lanes_of(META)
+    golden_format::meta_lanes(META, "golden-avx2")
 }
 
-fn lanes_of(meta: &str) -> usize {
-    let meta = json_mini::parse(meta).expect("meta.json is JSON");
-    meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("opencv_simd_lanes") as usize
-}
-
-fn u32_at(b: &[u8], o: usize) -> u32 {
-    u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]])
-}
-
-/// Compares `ours` with a golden (format in core/tests/golden.rs) field by field, bit for
-/// bit; returns (keypoints, keypoints bit-exact, descriptors bit-exact) and logs the
-/// first differences.
+/// Compares `ours` with a golden field by field, bit for bit; returns (keypoints,
+/// keypoints bit-exact, descriptors bit-exact) and logs the first differences.
 fn compare(name: &str, ours: &Features, golden: &[u8]) -> (usize, usize, usize) {
-    assert_eq!(&golden[..8], b"SIFTGLD1", "{name}: bad magic");
-    let n = u32_at(golden, 16) as usize;
+    let golden = golden_format::parse_golden(golden, name);
+    let n = golden.keypoints.len();
     assert_eq!(ours.keypoints.len(), n, "{name}: keypoint count");
     assert_eq!(ours.descriptors.len(), n, "{name}: descriptor count");
     let (mut kp_ok, mut desc_ok, mut shown) = (0, 0, 0);
-    let base = 20 + 24 * n;
-    for (i, k) in ours.keypoints.iter().enumerate() {
-        let o = 20 + 24 * i;
-        let want = [
-            u32_at(golden, o),
-            u32_at(golden, o + 4),
-            u32_at(golden, o + 8),
-            u32_at(golden, o + 12),
-            u32_at(golden, o + 16),
-        ];
-        let got = [k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits()];
-        if got == want && k.octave == u32_at(golden, o + 20) as i32 {
+    let bits = |k: &KeyPoint| [k.x.to_bits(), k.y.to_bits(), k.size.to_bits(), k.angle.to_bits(), k.response.to_bits()];
+    for (i, (k, g)) in ours.keypoints.iter().zip(&golden.keypoints).enumerate() {
+        let (got, want) = (bits(k), bits(g));
+        if got == want && k.octave == g.octave {
             kp_ok += 1;
         } else if shown < 5 {
             shown += 1;
             console_log!("{name} keypoint {i}: (x, y, size, angle, response) bits ours {got:?} opencv {want:?}; {k:?}");
         }
-        let d = &ours.descriptors[i];
-        if d[..] == golden[base + 128 * i..base + 128 * (i + 1)] {
+        if ours.descriptors[i] == golden.descriptors[i] {
             desc_ok += 1;
         } else if shown < 5 {
             shown += 1;
@@ -137,7 +119,7 @@ fn sift_in_the_browser_is_bit_exact_against_opencv() {
 /// is seen.
 #[wasm_bindgen_test]
 fn sift_in_the_browser_follows_opencvs_simd_width() {
-    let lanes_16 = lanes_of(META_16);
+    let lanes_16 = golden_format::meta_lanes(META_16, "golden");
     assert_ne!(lanes_16, golden_lanes(), "the two golden sets should have different widths");
     let (f, ms) = sift_at(FRAME2_16, lanes_16);
     let (n, kp_ok, desc_ok) = compare(&format!("synthetic 000002 at {lanes_16} lanes"), &f, GOLDEN2_16);
@@ -166,7 +148,7 @@ fn the_manuals_seven_examples_reproduce_in_the_browser() {
 
 /// OpenCV's own features (default-wheel golden) as `Features`.
 fn golden_features(golden: &[u8]) -> Features {
-    let g = golden_data::parse_golden(golden, "golden");
+    let g = golden_format::parse_golden(golden, "ipp golden");
     Features { keypoints: g.keypoints, descriptors: g.descriptors }
 }
 

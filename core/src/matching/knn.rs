@@ -26,7 +26,10 @@ pub fn knn_row(query_idx: usize, row: &[f32], k: usize) -> Vec<DMatch> {
         _ => {
             let mut best: Vec<DMatch> = Vec::with_capacity(k + 1);
             for (j, &d) in row.iter().enumerate() {
-                if best.len() == k && !(d < best[k - 1].distance) {
+                // Not better than the k-th best: a tie keeps the earlier
+                // train index (distances are square roots of integers,
+                // never NaN).
+                if best.len() == k && d >= best[k - 1].distance {
                     continue;
                 }
                 let pos = best.partition_point(|m| m.distance <= d);

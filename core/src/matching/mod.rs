@@ -2,6 +2,10 @@
 //! the dt / nn / nndr strategies, `matching_info`, and the explanation of a
 //! result for the app.
 
+// Every unsafe operation sits in its own `unsafe` block with the reason it
+// holds, also inside `unsafe fn`s.
+#![deny(unsafe_op_in_unsafe_fn)]
+
 pub mod distance;
 pub mod explain;
 pub mod info;

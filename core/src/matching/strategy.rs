@@ -128,6 +128,45 @@ impl Strategy {
     }
 }
 
+/// A strategy without its threshold: what a menu, a link or an exercise picks
+/// before the threshold is known. Its names are the lab's `-a` values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum StrategyKind {
+    Dt,
+    Nn,
+    Nndr,
+}
+
+impl StrategyKind {
+    /// The three, in the lab's order.
+    pub const ALL: [StrategyKind; 3] = [StrategyKind::Dt, StrategyKind::Nn, StrategyKind::Nndr];
+
+    /// The lab's name (`-a`).
+    pub fn name(self) -> &'static str {
+        match self {
+            StrategyKind::Dt => "dt",
+            StrategyKind::Nn => "nn",
+            StrategyKind::Nndr => "nndr",
+        }
+    }
+
+    /// The kind named `name` (exactly `dt`, `nn` or `nndr`), if any.
+    pub fn parse(name: &str) -> Option<StrategyKind> {
+        StrategyKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+impl Strategy {
+    /// The strategy's kind (its threshold dropped).
+    pub fn kind(&self) -> StrategyKind {
+        match self {
+            Strategy::Dt(_) => StrategyKind::Dt,
+            Strategy::Nn(_) => StrategyKind::Nn,
+            Strategy::Nndr(_) => StrategyKind::Nndr,
+        }
+    }
+}
+
 /// Checks a feature id against the query frame's keypoints.
 pub fn check_feature(feature: usize, prev: &Features) -> Result<()> {
     let n = prev.keypoints.len();
@@ -287,6 +326,19 @@ mod tests {
         // Fewer than 2 train rows is still an error for nndr on every path.
         let one = tie_heavy_features(1, 3);
         assert!(match_all(&Strategy::Nndr(0.8), &prev, &one).is_err());
+    }
+
+    #[test]
+    fn kinds_round_trip_through_their_names() {
+        for k in StrategyKind::ALL {
+            assert_eq!(StrategyKind::parse(k.name()), Some(k));
+        }
+        assert_eq!(StrategyKind::ALL.map(StrategyKind::name), ["dt", "nn", "nndr"]);
+        assert_eq!(StrategyKind::parse("knn"), None);
+        assert_eq!(StrategyKind::parse("NNDR"), None);
+        for s in [Strategy::Dt(1.0), Strategy::Nn(None), Strategy::Nndr(0.8)] {
+            assert_eq!(s.kind().name(), s.name());
+        }
     }
 
     #[test]

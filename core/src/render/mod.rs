@@ -13,6 +13,10 @@
 //! (`testdata/compare_visual.py`). Only text differs: a built-in 5x7 bitmap
 //! font ([`font`]) replaces OpenCV's Hershey strokes.
 
+// Every unsafe operation sits in its own `unsafe` block with the reason it
+// holds, also inside `unsafe fn`s (render has none today).
+#![deny(unsafe_op_in_unsafe_fn)]
+
 pub mod draw;
 pub mod font;
 pub mod info;

@@ -4,35 +4,9 @@
 
 use crate::{Error, Result};
 
-/// Euclidean distance of two 3-D points, accurately rounded like Python's
-/// `math.dist` (the lab's scale): the sum of squares is kept as a
-/// double-double (exact products by FMA, TwoSum), then the square root gets
-/// one Newton correction. A plain `sqrt(dx²+dy²+dz²)` can be off by one ulp.
-pub fn dist3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
-    let (mut hi, mut lo) = (0.0f64, 0.0f64);
-    for k in 0..3 {
-        let d = a[k] - b[k];
-        let p = d * d;
-        let pe = d.mul_add(d, -p);
-        // TwoSum(hi, p)
-        let s = hi + p;
-        let bb = s - hi;
-        let e = (hi - (s - bb)) + (p - bb);
-        hi = s;
-        lo += e + pe;
-    }
-    let s = hi + lo;
-    let lo = lo - (s - hi);
-    if s == 0.0 || !s.is_finite() {
-        return s.sqrt();
-    }
-    let h = s.sqrt();
-    // Residual (s + lo) − h², with h² exact via FMA.
-    let hh = h * h;
-    let hh_err = h.mul_add(h, -hh);
-    let r = ((s - hh) - hh_err) + lo;
-    h + r / (2.0 * h)
-}
+/// `math.dist`, the lab's scale: kept with the ground-truth poses it
+/// measures (`dataset`), so that the dataset does not depend on the VO.
+pub use crate::dataset::dist3;
 
 /// Root mean square of the position differences.
 pub fn ate_rmse(est: &[[f64; 3]], gt: &[[f64; 3]]) -> Result<f64> {
@@ -68,15 +42,6 @@ pub fn max_median(v: &[f64]) -> (f64, f64) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn dist_is_accurately_rounded() {
-        assert_eq!(dist3(&[0.0; 3], &[3.0, 4.0, 12.0]), 13.0);
-        // math.dist((0.1, 0.2, 0.3), (0.4, 0.5, 0.6)) in CPython 3.11.
-        assert_eq!(dist3(&[0.1, 0.2, 0.3], &[0.4, 0.5, 0.6]), 0.5196152422706632);
-        // math.dist((-0.4686, -0.0283, 1.3347), (-0.9381, -0.0511, 2.1234)) in CPython 3.11.
-        assert_eq!(dist3(&[-0.4686, -0.0283, 1.3347], &[-0.9381, -0.0511, 2.1234]), 0.9181491055378752);
-    }
 
     #[test]
     fn ate_and_differences() {

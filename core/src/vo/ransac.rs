@@ -5,9 +5,9 @@
 //! strict-greater model replacement and `RANSACUpdateNumIters`. No refinement:
 //! the result is the best minimal-sample model.
 
+use super::camera::Camera;
 use super::five_point::five_point;
-use super::linalg::CvRng;
-use super::{Camera, Mat3};
+use super::linalg::{CvRng, Mat3};
 use crate::{Error, Result};
 
 /// RANSAC settings of the lab's call.
@@ -116,19 +116,22 @@ fn sampson_errors(e: &Mat3, pts: &Columns, t: f32, err: &mut Vec<f32>) -> usize 
     err.resize(pts.x1.len(), 0.0);
     #[cfg(target_arch = "x86_64")]
     {
+        // The same loop compiled for wider vectors: each lane still does
+        // OpenCV's unfused scalar operations, so only the speed changes.
         #[target_feature(enable = "avx512f")]
-        unsafe fn avx512(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
+        fn avx512(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
             body(e, pts, t, err)
         }
         #[target_feature(enable = "avx2")]
-        unsafe fn avx2(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
+        fn avx2(e: &Mat3, pts: &Columns, t: f32, err: &mut [f32]) -> usize {
             body(e, pts, t, err)
         }
-        // SAFETY (both): the CPU has the one feature the function enables.
         if crate::simd::avx512f() {
+            // SAFETY: the CPU has AVX-512 F, the one feature the function enables.
             return unsafe { avx512(e, pts, t, err) };
         }
         if crate::simd::avx2() {
+            // SAFETY: the CPU has AVX2, the one feature the function enables.
             return unsafe { avx2(e, pts, t, err) };
         }
     }
@@ -223,9 +226,9 @@ pub fn find_essential_mat(
 }
 
 #[cfg(test)]
-pub(crate) mod tests {
+mod tests {
     use super::*;
-    use crate::vo::five_point::tests::distance_up_to_scale;
+    use crate::vo::testing::{distance_up_to_scale, golden_points, SCENE_R, SCENE_T};
 
     #[test]
     fn update_num_iters_matches_opencv_formula() {
@@ -235,35 +238,6 @@ pub(crate) mod tests {
         // Never above the current count; all inliers ends the loop.
         assert_eq!(update_num_iters(0.999, 0.5, 5, 100), 100);
         assert_eq!(update_num_iters(0.999, 0.0, 5, 1000), 0);
-    }
-
-    /// Mirrors `lcg_scene` of testdata/gen_goldens.py operation by operation,
-    /// so both sides hold the same f32 pixels.
-    pub(crate) fn pixel_scene(r: &Mat3, t: [f64; 3], n: usize, seed: u64) -> (Vec<[f32; 2]>, Vec<[f32; 2]>) {
-        // The normalized scene, then x·f + c in the same operation order.
-        let cam = Camera::default();
-        let (a, b) = crate::vo::five_point::tests::scene(r, t, n, seed);
-        let px = |p: &[f64; 2]| [(p[0] * cam.fx + cam.cx) as f32, (p[1] * cam.fy + cam.cy) as f32];
-        (a.iter().map(px).collect(), b.iter().map(px).collect())
-    }
-
-    /// cv2.Rodrigues([0.005, -0.0316, 0.005]) and the translation of the golden scene.
-    pub(crate) const SCENE_R: Mat3 = [
-        [0.9994882647177734, -0.005078119343031715, -0.03158197896573382],
-        [0.004920133148589171, 0.9999750021844237, -0.005078119343031715],
-        [0.03160697678131018, 0.004920133148589171, 0.9994882647177734],
-    ];
-    pub(crate) const SCENE_T: [f64; 3] = [0.05, -0.02, -1.0];
-
-    /// 300 correspondences; every 5th point of the first set moved by
-    /// (15 + i mod 25, −20) px: 60 outliers.
-    pub(crate) fn golden_points() -> (Vec<[f32; 2]>, Vec<[f32; 2]>) {
-        let (mut p1, p2) = pixel_scene(&SCENE_R, SCENE_T, 300, 99);
-        for i in (0..300).step_by(5) {
-            p1[i][0] += 15.0 + (i % 25) as f32;
-            p1[i][1] -= 20.0;
-        }
-        (p1, p2)
     }
 
     // cv2.findEssentialMat(p1, p2, focal=718.856, pp=(607.1928, 185.2157),

@@ -3,11 +3,10 @@
 //! candidates in OpenCV's order, DLT triangulation and the cheirality /
 //! distance (50) votes of every point (the lab passes no mask).
 
+use super::camera::Camera;
 #[cfg(test)]
 use super::linalg::null_vector_4x4;
-use super::linalg::svd;
-use super::null_vectors::null_vectors_4x4;
-use super::{det3, mat_mul, Camera, Mat3, Vec3};
+use super::linalg::{det3, mat_mul, null_vectors_4x4, svd, Mat3, Vec3};
 use crate::{Error, Result};
 
 /// recoverPose's default `distanceThresh`.
@@ -142,10 +141,9 @@ pub fn recover_pose(e: &Mat3, points1: &[[f32; 2]], points2: &[[f32; 2]], cam: &
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::vo::five_point::tests::{rodrigues, scene};
-    use crate::vo::ransac::tests::{golden_points, SCENE_R, SCENE_T};
+    use crate::vo::linalg::skew;
     use crate::vo::ransac::{find_essential_mat, RansacParams};
-    use crate::vo::{mat_mul, skew};
+    use crate::vo::testing::{golden_points, rodrigues, scene, SCENE_R, SCENE_T};
 
     #[test]
     fn recovers_r_and_t_from_the_true_essential_matrix() {
@@ -157,12 +155,8 @@ mod tests {
         for sign in [1.0, -1.0] {
             let e = mat_mul(&skew(t), &r).map(|row| row.map(|v| v * sign / tn));
             let pose = recover_pose_normalized(&e, &a, &b, DISTANCE_THRESH).unwrap();
-            for i in 0..3 {
-                assert!((pose.t[i] - t[i] / tn).abs() < 1e-12, "t {:?}", pose.t);
-                for j in 0..3 {
-                    assert!((pose.r[i][j] - r[i][j]).abs() < 1e-12, "R {:?}", pose.r);
-                }
-            }
+            assert!(close(pose.t, t.map(|v| v / tn), 1e-12), "t {:?}", pose.t);
+            assert!(close(pose.r.concat(), r.concat(), 1e-12), "R {:?}", pose.r);
             // Depths are 5–25 (< 50) in camera 1 and the motion is short:
             // every point votes for the right candidate, none for the others.
             assert_eq!(pose.inliers, 200);
@@ -170,17 +164,18 @@ mod tests {
         }
     }
 
+    /// Whether every value is within `tol` of its counterpart (NaN is not).
+    fn close(a: impl IntoIterator<Item = f64>, b: impl IntoIterator<Item = f64>, tol: f64) -> bool {
+        a.into_iter().zip(b).all(|(x, y)| (x - y).abs() < tol)
+    }
+
     /// The old way, as OpenCV does it: one SVD per candidate.
     fn votes_separately(r: &Mat3, t: &Vec3, a: [f64; 2], b: [f64; 2], dist: f64) -> bool {
-        let p: [[f64; 4]; 3] = std::array::from_fn(|i| [r[i][0], r[i][1], r[i][2], t[i]]);
-        let m = [
-            [-1.0, 0.0, a[0], 0.0],
-            [0.0, -1.0, a[1], 0.0],
-            std::array::from_fn(|k| b[0] * p[2][k] - p[0][k]),
-            std::array::from_fn(|k| b[1] * p[2][k] - p[1][k]),
-        ];
+        let (m, p) = dlt(r, t, a, b);
         let x = null_vector_4x4(&m);
-        if !(x[2] * x[3] > 0.0) {
+        // `X2·X3 > 0`, false for NaN.
+        let sign = x[2] * x[3];
+        if sign.is_nan() || sign <= 0.0 {
             return false;
         }
         let q = [x[0] / x[3], x[1] / x[3], x[2] / x[3], 1.0];
@@ -200,7 +195,7 @@ mod tests {
         // with short distance thresholds to hit `Z < dist` both ways.
         let mut a: Vec<[f64; 2]> = p1.iter().map(|&p| cam.normalize(p)).collect();
         let mut b: Vec<[f64; 2]> = p2.iter().map(|&p| cam.normalize(p)).collect();
-        let mut rnd = crate::vo::testing::uniform(0x2545_f491_4f6c_dd1d);
+        let mut rnd = crate::testutil::signed_units(0x2545_f491_4f6c_dd1d);
         for _ in 0..2000 {
             let (x, y) = (rnd(), rnd() * 0.5);
             a.push([x, y]);
@@ -247,20 +242,12 @@ mod tests {
         let pose = recover_pose(e.essential().unwrap(), &p1, &p2, &cam).unwrap();
         assert_eq!(pose.inliers, OPENCV_POSE_INLIERS);
         assert_eq!(pose.mask.iter().filter(|&&m| m).count(), OPENCV_POSE_INLIERS);
-        for k in 0..9 {
-            assert!((pose.r[k / 3][k % 3] - OPENCV_R[k]).abs() < 1e-10, "R {:?}", pose.r);
-        }
-        for k in 0..3 {
-            assert!((pose.t[k] - OPENCV_T[k]).abs() < 1e-10, "t {:?}", pose.t);
-        }
+        assert!(close(pose.r.concat(), OPENCV_R, 1e-10), "R {:?}", pose.r);
+        assert!(close(pose.t, OPENCV_T, 1e-10), "t {:?}", pose.t);
         // And the truth: R within 1e-5, t within 1e-3 of the unit direction.
         let tn = (SCENE_T[0].powi(2) + SCENE_T[1].powi(2) + SCENE_T[2].powi(2)).sqrt();
-        for i in 0..3 {
-            assert!((pose.t[i] - SCENE_T[i] / tn).abs() < 1e-3);
-            for j in 0..3 {
-                assert!((pose.r[i][j] - SCENE_R[i][j]).abs() < 1e-5);
-            }
-        }
+        assert!(close(pose.t, SCENE_T.map(|v| v / tn), 1e-3));
+        assert!(close(pose.r.concat(), SCENE_R.concat(), 1e-5));
     }
 
     #[test]
@@ -275,11 +262,7 @@ mod tests {
         let e = find_essential_mat(&p1, &p2, &cam, &RansacParams::default()).unwrap();
         let pose = recover_pose(e.essential().unwrap(), &p1, &p2, &cam).unwrap();
         assert_eq!(pose.inliers, 400);
-        for i in 0..3 {
-            assert!((pose.t[i] - t[i]).abs() < 1e-3, "t {:?}", pose.t);
-            for j in 0..3 {
-                assert!((pose.r[i][j] - r[i][j]).abs() < 1e-4, "R {:?}", pose.r);
-            }
-        }
+        assert!(close(pose.t, t, 1e-3), "t {:?}", pose.t);
+        assert!(close(pose.r.concat(), r.concat(), 1e-4), "R {:?}", pose.r);
     }
 }

@@ -7,9 +7,12 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use siftlab_core::sift::{KeyPoint, SiftParams};
+use siftlab_core::sift::SiftParams;
 
 use super::json_mini;
+
+mod format;
+pub use format::{meta_lanes, parse_golden, Golden};
 
 /// One committed set of OpenCV goldens, written by
 /// `tests/scripts/gen_goldens.py` on one CPU: `noipp/`, `ipp/`,
@@ -30,9 +33,8 @@ impl GoldenSet {
     fn new(name: &'static str) -> GoldenSet {
         let path = fixtures().join(name).join("meta.json");
         let meta = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+        let lanes = meta_lanes(&meta, name);
         let meta = json_mini::parse(&meta).expect("meta.json is JSON");
-        let lanes = meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("meta.json: opencv_simd_lanes") as usize;
-        assert!(matches!(lanes, 8 | 16), "{name}/meta.json: opencv_simd_lanes {lanes}");
         let dataset = meta.get("dataset").and_then(|v| v.str()).expect("meta.json: dataset").to_owned();
         GoldenSet { name, lanes, dataset }
     }
@@ -89,13 +91,6 @@ pub fn golden_params() -> SiftParams {
     primary_set().params()
 }
 
-pub struct Golden {
-    pub width: u32,
-    pub height: u32,
-    pub keypoints: Vec<KeyPoint>,
-    pub descriptors: Vec<[u8; 128]>,
-}
-
 pub fn fixtures() -> PathBuf {
     repo_root().join("tests/fixtures")
 }
@@ -107,31 +102,6 @@ pub fn repo_root() -> PathBuf {
 /// The bundled real KITTI data (`www/demo/MyKITTI`).
 pub fn kitti() -> PathBuf {
     repo_root().join("www/demo/MyKITTI")
-}
-
-pub fn parse_golden(bytes: &[u8], name: &str) -> Golden {
-    assert!(bytes.len() >= 20, "{name}: too short for a header");
-    assert_eq!(&bytes[..8], b"SIFTGLD1", "{name}: bad magic");
-    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
-    let f32_at = |o: usize| f32::from_le_bytes(bytes[o..o + 4].try_into().unwrap());
-    let (width, height, n) = (u32_at(8), u32_at(12), u32_at(16) as usize);
-    let kp_end = 20 + n * 24;
-    assert_eq!(bytes.len(), kp_end + n * 128, "{name}: size does not match N={n}");
-    let keypoints = (0..n)
-        .map(|i| {
-            let o = 20 + i * 24;
-            KeyPoint {
-                x: f32_at(o),
-                y: f32_at(o + 4),
-                size: f32_at(o + 8),
-                angle: f32_at(o + 12),
-                response: f32_at(o + 16),
-                octave: u32_at(o + 20) as i32,
-            }
-        })
-        .collect();
-    let descriptors = bytes[kp_end..].chunks_exact(128).map(|c| <[u8; 128]>::try_from(c).unwrap()).collect();
-    Golden { width, height, keypoints, descriptors }
 }
 
 /// Frame ids that have a golden of `kind` in the primary set, sorted.

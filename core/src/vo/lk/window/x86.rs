@@ -21,12 +21,20 @@ struct Pairs {
 }
 
 /// Byte pairs of an 8-bit row at `p` (reads `p[0..32]`), zero-extended.
+///
+/// # Safety
+/// `p[0..32]` must be readable, and the CPU must have AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn pairs_u8(p: *const u8) -> Pairs {
     const Z: i8 = -128;
-    let src = _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i);
-    let tail = _mm_loadu_si128(p.add(16) as *const __m128i);
+    // SAFETY: the caller vouches for p[0..32]; unaligned loads.
+    let (src, tail) = unsafe {
+        (
+            _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i),
+            _mm_loadu_si128(p.add(16) as *const __m128i),
+        )
+    };
     #[rustfmt::skip]
     let ma = _mm256_setr_epi8(
         0, Z, 1, Z, 4, Z, 5, Z, 1, Z, 2, Z, 5, Z, 6, Z,
@@ -46,6 +54,9 @@ unsafe fn pairs_u8(p: *const u8) -> Pairs {
 }
 
 /// Element pairs of a 16-bit row at `p` (reads `p[0..28]`).
+///
+/// # Safety
+/// `p[0..28]` must be readable, and the CPU must have AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn pairs_i16(p: *const i16) -> Pairs {
@@ -56,13 +67,21 @@ unsafe fn pairs_i16(p: *const i16) -> Pairs {
         0, 1, 2, 3, 8, 9, 10, 11, 2, 3, 4, 5, 10, 11, 12, 13,
         0, 1, 2, 3, 8, 9, 10, 11, 2, 3, 4, 5, 10, 11, 12, 13);
     let mt = _mm_setr_epi8(0, 1, 2, 3, 2, 3, 4, 5, 4, 5, 6, 7, 6, 7, 8, 9);
-    let a = _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i);
-    let b = _mm256_loadu2_m128i(p.add(10) as *const __m128i, p.add(2) as *const __m128i);
+    // SAFETY: the caller vouches for p[0..28]; the last load, 8 elements
+    // from p + 20, ends there. Unaligned loads.
+    let (a, b, ta, tb) = unsafe {
+        (
+            _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i),
+            _mm256_loadu2_m128i(p.add(10) as *const __m128i, p.add(2) as *const __m128i),
+            _mm_loadu_si128(p.add(16) as *const __m128i),
+            _mm_loadu_si128(p.add(20) as *const __m128i),
+        )
+    };
     Pairs {
         a: _mm256_shuffle_epi8(a, m),
         b: _mm256_shuffle_epi8(b, m),
-        ta: _mm_shuffle_epi8(_mm_loadu_si128(p.add(16) as *const __m128i), mt),
-        tb: _mm_shuffle_epi8(_mm_loadu_si128(p.add(20) as *const __m128i), mt),
+        ta: _mm_shuffle_epi8(ta, mt),
+        tb: _mm_shuffle_epi8(tb, mt),
     }
 }
 
@@ -70,7 +89,7 @@ unsafe fn pairs_i16(p: *const i16) -> Pairs {
 /// 2^(S−1)) >> S`, packed to i16 in the row layout (block part, tail part).
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn blend<const S: i32>(top: &Pairs, bot: &Pairs, wt: __m256i, wb: __m256i) -> (__m256i, __m128i) {
+fn blend<const S: i32>(top: &Pairs, bot: &Pairs, wt: __m256i, wb: __m256i) -> (__m256i, __m128i) {
     (
         _mm256_packs_epi32(mix::<S>(top.a, bot.a, wt, wb), mix::<S>(top.b, bot.b, wt, wb)),
         _mm_packs_epi32(
@@ -82,14 +101,14 @@ unsafe fn blend<const S: i32>(top: &Pairs, bot: &Pairs, wt: __m256i, wb: __m256i
 
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn mix<const S: i32>(t: __m256i, b: __m256i, wt: __m256i, wb: __m256i) -> __m256i {
+fn mix<const S: i32>(t: __m256i, b: __m256i, wt: __m256i, wb: __m256i) -> __m256i {
     let v = _mm256_add_epi32(_mm256_madd_epi16(t, wt), _mm256_madd_epi16(b, wb));
     _mm256_srai_epi32::<S>(_mm256_add_epi32(v, _mm256_set1_epi32(1 << (S - 1))))
 }
 
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn mix4<const S: i32>(t: __m128i, b: __m128i, wt: __m128i, wb: __m128i) -> __m128i {
+fn mix4<const S: i32>(t: __m128i, b: __m128i, wt: __m128i, wb: __m128i) -> __m128i {
     let v = _mm_add_epi32(_mm_madd_epi16(t, wt), _mm_madd_epi16(b, wb));
     _mm_srai_epi32::<S>(_mm_add_epi32(v, _mm_set1_epi32(1 << (S - 1))))
 }
@@ -98,31 +117,55 @@ unsafe fn mix4<const S: i32>(t: __m128i, b: __m128i, wt: __m128i, wb: __m128i) -
 /// for the bottom one (all ≤ 16384).
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn weight_pairs(w: &[i32; 4]) -> (__m256i, __m256i) {
+fn weight_pairs(w: &[i32; 4]) -> (__m256i, __m256i) {
     (_mm256_set1_epi32((w[1] << 16) | (w[0] & 0xffff)), _mm256_set1_epi32((w[3] << 16) | (w[2] & 0xffff)))
 }
 
+/// Stores positions 0..16 and 16..24 of a row.
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn store(row: &mut Row, lo: __m256i, tail: __m128i) {
-    _mm256_store_si256(row.0.as_mut_ptr() as *mut __m256i, lo);
-    _mm_store_si128(row.0.as_mut_ptr().add(16) as *mut __m128i, tail);
+fn store(row: &mut Row, lo: __m256i, tail: __m128i) {
+    // SAFETY: a Row is 32 i16 aligned to 32 bytes, so both aligned stores
+    // (bytes 0..32 and 32..48) are inside it.
+    unsafe {
+        _mm256_store_si256(row.0.as_mut_ptr() as *mut __m256i, lo);
+        _mm_store_si128(row.0.as_mut_ptr().add(16) as *mut __m128i, tail);
+    }
 }
 
+/// Loads positions 0..16 and 16..24 of a row.
 #[target_feature(enable = "avx2")]
 #[inline]
-unsafe fn load(row: &Row) -> (__m256i, __m128i) {
-    (_mm256_load_si256(row.0.as_ptr() as *const __m256i), _mm_load_si128(row.0.as_ptr().add(16) as *const __m128i))
+fn load(row: &Row) -> (__m256i, __m128i) {
+    // SAFETY: as in `store`, both aligned loads are inside the row.
+    unsafe {
+        (_mm256_load_si256(row.0.as_ptr() as *const __m256i), _mm_load_si128(row.0.as_ptr().add(16) as *const __m128i))
+    }
+}
+
+/// Positions `at .. at + 8` of a row, `at` ≤ 24.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn load8(row: &Row, at: usize) -> __m128i {
+    assert!(at <= 24);
+    // SAFETY: 8 of the row's 32 i16 from `at` ≤ 24; an unaligned load.
+    unsafe { _mm_loadu_si128(row.0.as_ptr().add(at) as *const __m128i) }
 }
 
 /// Interpolates the 21 rows of an 8-bit level window at `p` into `out`.
+///
+/// # Safety
+/// 32 bytes must be readable at `p + y·stride` for y = 0..=21, and the CPU
+/// must have AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn warp_u8(p: *const u8, stride: usize, w: &[i32; 4], out: &mut Win16) {
     let (wt, wb) = weight_pairs(w);
-    let mut top = pairs_u8(p);
+    // SAFETY: row 0; the caller vouches for rows 0 ..= 21.
+    let mut top = unsafe { pairs_u8(p) };
     for (y, row) in out.iter_mut().enumerate() {
-        let bot = pairs_u8(p.add((y + 1) * stride));
+        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
+        let bot = unsafe { pairs_u8(p.add((y + 1) * stride)) };
         let (lo, tail) = blend::<9>(&top, &bot, wt, wb);
         store(row, lo, tail);
         top = bot;
@@ -131,14 +174,20 @@ unsafe fn warp_u8(p: *const u8, stride: usize, w: &[i32; 4], out: &mut Win16) {
 
 /// The same for a 16-bit derivative plane; columns 21..23 are zeroed so that
 /// every product with them vanishes.
+///
+/// # Safety
+/// 28 elements must be readable at `p + y·stride` for y = 0..=21, and the
+/// CPU must have AVX2.
 #[target_feature(enable = "avx2")]
 #[inline]
 unsafe fn warp_i16(p: *const i16, stride: usize, w: &[i32; 4], out: &mut Win16, abs: &mut Win16) {
     let (wt, wb) = weight_pairs(w);
     let keep = _mm_setr_epi16(-1, -1, -1, -1, -1, 0, 0, 0);
-    let mut top = pairs_i16(p);
+    // SAFETY: row 0; the caller vouches for rows 0 ..= 21.
+    let mut top = unsafe { pairs_i16(p) };
     for (y, (row, arow)) in out.iter_mut().zip(abs.iter_mut()).enumerate() {
-        let bot = pairs_i16(p.add((y + 1) * stride));
+        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
+        let bot = unsafe { pairs_i16(p.add((y + 1) * stride)) };
         let (lo, tail) = blend::<14>(&top, &bot, wt, wb);
         let tail = _mm_and_si128(tail, keep);
         store(row, lo, tail);
@@ -153,36 +202,44 @@ struct Sum(__m256i, __m128i);
 impl Sum {
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn new() -> Sum {
+    fn new() -> Sum {
         Sum(_mm256_setzero_si256(), _mm_setzero_si128())
     }
 
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn add(&mut self, a: (__m256i, __m128i), b: (__m256i, __m128i)) {
+    fn add(&mut self, a: (__m256i, __m128i), b: (__m256i, __m128i)) {
         self.0 = _mm256_add_epi32(self.0, _mm256_madd_epi16(a.0, b.0));
         self.1 = _mm_add_epi32(self.1, _mm_madd_epi16(a.1, b.1));
     }
 
     #[target_feature(enable = "avx2")]
     #[inline]
-    unsafe fn acc(&self) -> Acc {
+    fn acc(&self) -> Acc {
         let mut a = Acc::default();
-        _mm256_storeu_si256(a.blocks.as_mut_ptr() as *mut __m256i, self.0);
-        _mm_storeu_si128(a.tail.as_mut_ptr() as *mut __m128i, self.1);
+        // SAFETY: `blocks` holds 8 i32 (32 bytes), `tail` 4 (16 bytes);
+        // unaligned stores.
+        unsafe {
+            _mm256_storeu_si256(a.blocks.as_mut_ptr() as *mut __m256i, self.0);
+            _mm_storeu_si128(a.tail.as_mut_ptr() as *mut __m128i, self.1);
+        }
         a
     }
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
+fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
     let base = prev.offset(ix, iy);
     assert!(base + WIN * prev.stride + 32 <= prev.padded.len());
-    warp_u8(prev.padded[base..].as_ptr(), prev.stride, w, &mut p.t);
+    // SAFETY: row 21 of the window starts at base + 21·stride and its 32
+    // bytes end inside the padded level (asserted just above).
+    unsafe { warp_u8(prev.padded[base..].as_ptr(), prev.stride, w, &mut p.t) };
     let dbase = deriv.offset(ix, iy);
     assert!(dbase + WIN * deriv.stride + 28 <= deriv.ix.len() && deriv.ix.len() == deriv.iy.len());
-    warp_i16(deriv.ix[dbase..].as_ptr(), deriv.stride, w, &mut p.x, &mut p.ax);
-    warp_i16(deriv.iy[dbase..].as_ptr(), deriv.stride, w, &mut p.y, &mut p.ay);
+    // SAFETY: likewise, 28 elements of row 21 end inside each plane.
+    unsafe { warp_i16(deriv.ix[dbase..].as_ptr(), deriv.stride, w, &mut p.x, &mut p.ax) };
+    // SAFETY: as for the X plane.
+    unsafe { warp_i16(deriv.iy[dbase..].as_ptr(), deriv.stride, w, &mut p.y, &mut p.ay) };
 
     // X², Y² are their own bounds; XY is bounded by |X||Y|.
     let (mut xx, mut yy, mut xy, mut bxy) = (Sum::new(), Sum::new(), Sum::new(), Sum::new());
@@ -221,26 +278,25 @@ unsafe fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4]
 /// into columns B..B+3 and B+4..B+7 and added to the lanes in column order;
 /// the tail's five columns as vectors (X², XY, Y², 0) added in order.
 #[target_feature(enable = "avx2")]
-unsafe fn tensor_sums_replay(x: &Win16, y: &Win16) -> ([[f32; 4]; 3], [f32; 3]) {
+fn tensor_sums_replay(x: &Win16, y: &Win16) -> ([[f32; 4]; 3], [f32; 3]) {
     // Row layout positions B, B+1, .. hold columns B, B+4, B+1, B+5, ...
     let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
     let (mut lxx, mut lxy, mut lyy) = (_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps());
     let mut tail = _mm_setzero_ps();
     let products =
         |a: __m256i, b: __m256i| _mm256_permutevar8x32_ps(_mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b)), split);
-    for r in 0..WIN {
-        let (xr, yr) = (x[r].0.as_ptr(), y[r].0.as_ptr());
+    for (xr, yr) in x.iter().zip(y) {
         for block in [0, 8] {
-            let xv = _mm256_cvtepi16_epi32(_mm_loadu_si128(xr.add(block) as *const __m128i));
-            let yv = _mm256_cvtepi16_epi32(_mm_loadu_si128(yr.add(block) as *const __m128i));
+            let xv = _mm256_cvtepi16_epi32(load8(xr, block));
+            let yv = _mm256_cvtepi16_epi32(load8(yr, block));
             let (pxx, pxy, pyy) = (products(xv, xv), products(xv, yv), products(yv, yv));
             lxx = _mm_add_ps(_mm_add_ps(lxx, _mm256_castps256_ps128(pxx)), _mm256_extractf128_ps::<1>(pxx));
             lxy = _mm_add_ps(_mm_add_ps(lxy, _mm256_castps256_ps128(pxy)), _mm256_extractf128_ps::<1>(pxy));
             lyy = _mm_add_ps(_mm_add_ps(lyy, _mm256_castps256_ps128(pyy)), _mm256_extractf128_ps::<1>(pyy));
         }
         // Columns 16..23 (21..23 are scratch, never added).
-        let xv = _mm256_cvtepi16_epi32(_mm_loadu_si128(xr.add(16) as *const __m128i));
-        let yv = _mm256_cvtepi16_epi32(_mm_loadu_si128(yr.add(16) as *const __m128i));
+        let xv = _mm256_cvtepi16_epi32(load8(xr, 16));
+        let yv = _mm256_cvtepi16_epi32(load8(yr, 16));
         let f = |a: __m256i, b: __m256i| _mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b));
         let (fxx, fxy, fyy) = (f(xv, xv), f(xv, yv), f(yv, yv));
         // Transposed: term vector c = (X²(c), XY(c), Y²(c), 0).
@@ -258,19 +314,21 @@ unsafe fn tensor_sums_replay(x: &Win16, y: &Win16) -> ([[f32; 4]; 3], [f32; 3]) 
         }
         tail = _mm_add_ps(tail, _mm256_extractf128_ps::<1>(t0));
     }
-    let mut out = [[0f32; 4]; 3];
-    for (o, l) in out.iter_mut().zip([lxx, lxy, lyy]) {
-        _mm_storeu_ps(o.as_mut_ptr(), l);
+    let (mut out, mut t) = ([[0f32; 4]; 3], [0f32; 4]);
+    // SAFETY: each store writes 4 f32 into a [f32; 4]; unaligned stores.
+    unsafe {
+        for (o, l) in out.iter_mut().zip([lxx, lxy, lyy]) {
+            _mm_storeu_ps(o.as_mut_ptr(), l);
+        }
+        _mm_storeu_ps(t.as_mut_ptr(), tail);
     }
-    let mut t = [0f32; 4];
-    _mm_storeu_ps(t.as_mut_ptr(), tail);
     (out, [t[0], t[1], t[2]])
 }
 
 /// OpenCV's T0..T3 (= P + Q: X of groups 0+2, Y of 0+2, X of 1+3, Y of
 /// 1+3) replayed from the stored J − T, for when a lanes bound fails.
 #[target_feature(enable = "avx2")]
-unsafe fn mismatch_lanes_replay(p: &Patch) -> [f32; 4] {
+pub(super) fn mismatch_lanes_replay(p: &Patch) -> [f32; 4] {
     let (mut acc_p, mut acc_q) = (_mm_setzero_ps(), _mm_setzero_ps());
     for y in 0..WIN {
         let (d, _) = load(&p.d[y]);
@@ -287,21 +345,25 @@ unsafe fn mismatch_lanes_replay(p: &Patch) -> [f32; 4] {
         acc_q = _mm_add_ps(acc_q, _mm256_extractf128_ps::<1>(qv));
     }
     let mut t = [0f32; 4];
-    _mm_storeu_ps(t.as_mut_ptr(), _mm_add_ps(acc_p, acc_q));
+    // SAFETY: 4 f32 into a [f32; 4]; an unaligned store.
+    unsafe { _mm_storeu_ps(t.as_mut_ptr(), _mm_add_ps(acc_p, acc_q)) };
     t
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
     let base = next.offset(jx, jy);
     assert!(base + WIN * next.stride + 32 <= next.padded.len());
     let src = next.padded[base..].as_ptr();
     let stride = next.stride;
     let (wt, wb) = weight_pairs(w);
     let (mut sx, mut sy, mut bx, mut by) = (Sum::new(), Sum::new(), Sum::new(), Sum::new());
-    let mut top = pairs_u8(src);
+    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
+    // inside the padded level (asserted above).
+    let mut top = unsafe { pairs_u8(src) };
     for y in 0..WIN {
-        let bot = pairs_u8(src.add((y + 1) * stride));
+        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
+        let bot = unsafe { pairs_u8(src.add((y + 1) * stride)) };
         let (j, tj) = blend::<9>(&top, &bot, wt, wb);
         top = bot;
         let (t, tt) = load(&p.t[y]);
@@ -321,12 +383,11 @@ unsafe fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) 
         by.add(ad, load(&p.ay[y]));
     }
     let (sx, sy, bx, by) = (sx.acc(), sy.acc(), bx.acc(), by.acc());
-    // SAFETY (the closure): AVX2 is enabled in this function.
-    wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| unsafe { mismatch_lanes_replay(p) })
+    wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| mismatch_lanes_replay(p))
 }
 
 #[target_feature(enable = "avx2")]
-unsafe fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) -> f32 {
+fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) -> f32 {
     let base = next.offset(jx, jy);
     assert!(base + WIN * next.stride + 32 <= next.padded.len());
     let src = next.padded[base..].as_ptr();
@@ -334,9 +395,12 @@ unsafe fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) 
     let ones = _mm256_set1_epi16(1);
     let tail_ones = _mm_setr_epi16(1, 1, 1, 1, 1, 0, 0, 0);
     let mut total = Sum::new();
-    let mut top = pairs_u8(src);
+    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
+    // inside the padded level (asserted above).
+    let mut top = unsafe { pairs_u8(src) };
     for y in 0..WIN {
-        let bot = pairs_u8(src.add((y + 1) * next.stride));
+        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
+        let bot = unsafe { pairs_u8(src.add((y + 1) * next.stride)) };
         let (j, tj) = blend::<9>(&top, &bot, wt, wb);
         top = bot;
         let (t, tt) = load(&p.t[y]);
@@ -354,12 +418,21 @@ pub struct Avx512;
 
 /// `pairs_u8` as one vector: chunks 0–1 the block pairs, chunk 2 the tail
 /// pairs, chunk 3 zero (reads `p[0..32]`).
+///
+/// # Safety
+/// `p[0..32]` must be readable, and the CPU must have AVX-512 BW.
 #[target_feature(enable = "avx512bw,avx512f,avx2")]
 #[inline]
 unsafe fn pairs_u8_512(p: *const u8) -> (__m512i, __m512i) {
     const Z: i8 = -128;
-    let lo = _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i);
-    let hi = _mm256_castsi128_si256(_mm_loadu_si128(p.add(16) as *const __m128i));
+    // SAFETY: the caller vouches for p[0..32]; unaligned loads.
+    let (lo, hi) = unsafe {
+        (
+            _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i),
+            _mm_loadu_si128(p.add(16) as *const __m128i),
+        )
+    };
+    let hi = _mm256_castsi128_si256(hi);
     let src = _mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi);
     #[rustfmt::skip]
     let ma = _mm512_set_epi8(
@@ -378,7 +451,7 @@ unsafe fn pairs_u8_512(p: *const u8) -> (__m512i, __m512i) {
 
 #[target_feature(enable = "avx512bw,avx512f,avx2")]
 #[inline]
-unsafe fn mix_512<const S: u32>(t: __m512i, b: __m512i, wt: __m512i, wb: __m512i) -> __m512i {
+fn mix_512<const S: u32>(t: __m512i, b: __m512i, wt: __m512i, wb: __m512i) -> __m512i {
     let v = _mm512_add_epi32(_mm512_madd_epi16(t, wt), _mm512_madd_epi16(b, wb));
     _mm512_srai_epi32::<S>(_mm512_add_epi32(v, _mm512_set1_epi32(1i32 << (S - 1))))
 }
@@ -386,9 +459,10 @@ unsafe fn mix_512<const S: u32>(t: __m512i, b: __m512i, wt: __m512i, wb: __m512i
 /// Splits an i32 sum vector into `Acc`: lanes 0–7 the blocks, 8–11 the tail.
 #[target_feature(enable = "avx512bw,avx512f,avx2")]
 #[inline]
-unsafe fn acc_512(v: __m512i) -> Acc {
+fn acc_512(v: __m512i) -> Acc {
     let mut lanes = [0i32; 16];
-    _mm512_storeu_si512(lanes.as_mut_ptr() as *mut _, v);
+    // SAFETY: 16 i32 into a [i32; 16]; an unaligned store.
+    unsafe { _mm512_storeu_si512(lanes.as_mut_ptr() as *mut _, v) };
     let mut a = Acc::default();
     a.blocks.copy_from_slice(&lanes[..8]);
     a.tail.copy_from_slice(&lanes[8..12]);
@@ -396,24 +470,29 @@ unsafe fn acc_512(v: __m512i) -> Acc {
 }
 
 #[target_feature(enable = "avx512bw,avx512f,avx2")]
-unsafe fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
     let base = next.offset(jx, jy);
     assert!(base + WIN * next.stride + 32 <= next.padded.len());
     let src = next.padded[base..].as_ptr();
     let stride = next.stride;
     let wt = _mm512_set1_epi32((w[1] << 16) | (w[0] & 0xffff));
     let wb = _mm512_set1_epi32((w[3] << 16) | (w[2] & 0xffff));
-    let row = |r: &Row| _mm512_loadu_si512(r.0.as_ptr() as *const _);
+    // SAFETY: a Row is 32 i16, exactly the 64 bytes loaded (unaligned).
+    let row = |r: &Row| unsafe { _mm512_loadu_si512(r.0.as_ptr() as *const _) };
     let zero = _mm512_setzero_si512();
     let (mut sx, mut sy, mut bx, mut by) = (zero, zero, zero, zero);
-    let mut top = pairs_u8_512(src);
+    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
+    // inside the padded level (asserted above).
+    let mut top = unsafe { pairs_u8_512(src) };
     for y in 0..WIN {
-        let bot = pairs_u8_512(src.add((y + 1) * stride));
+        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
+        let bot = unsafe { pairs_u8_512(src.add((y + 1) * stride)) };
         // Chunk 3 mixes zeros: (0 + 2^8) >> 9 = 0, so the padding stays 0.
         let j = _mm512_packs_epi32(mix_512::<9>(top.0, bot.0, wt, wb), mix_512::<9>(top.1, bot.1, wt, wb));
         top = bot;
         let d = _mm512_sub_epi16(j, row(&p.t[y]));
-        _mm512_storeu_si512(p.d[y].0.as_mut_ptr() as *mut _, d);
+        // SAFETY: the 64 bytes of the row p.d[y] (unaligned store).
+        unsafe { _mm512_storeu_si512(p.d[y].0.as_mut_ptr() as *mut _, d) };
         sx = _mm512_add_epi32(sx, _mm512_madd_epi16(d, row(&p.x[y])));
         sy = _mm512_add_epi32(sy, _mm512_madd_epi16(d, row(&p.y[y])));
         let ad = _mm512_abs_epi16(d);
@@ -421,8 +500,7 @@ unsafe fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Pat
         by = _mm512_add_epi32(by, _mm512_madd_epi16(ad, row(&p.ay[y])));
     }
     let (sx, sy, bx, by) = (acc_512(sx), acc_512(sy), acc_512(bx), acc_512(by));
-    // SAFETY (the closure): AVX2 is enabled in this function.
-    wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| unsafe { mismatch_lanes_replay(p) })
+    wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| mismatch_lanes_replay(p))
 }
 
 impl Kernels for Avx512 {
@@ -440,8 +518,8 @@ impl Kernels for Avx512 {
 
     #[inline(always)]
     fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
-        // SAFETY: only reached on AVX-512 BW CPUs (run_job checks); every
-        // load is inside the padded planes (asserted) or a whole `Row`.
+        // SAFETY: this kernel set is only used on AVX-512 BW CPUs (run_job
+        // checks), the features the function enables.
         unsafe { mismatch_512(next, jx, jy, w, p) }
     }
 
@@ -460,133 +538,20 @@ impl Kernels for Avx2 {
 
     #[inline(always)]
     fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
-        // SAFETY: only reached on AVX2 CPUs (run_job checks); every load is
-        // inside the padded planes (asserted in the callee).
+        // SAFETY: this kernel set is only used on AVX2 CPUs (run_job checks),
+        // the feature the function enables.
         unsafe { load_patch(prev, deriv, ix, iy, w, p) }
     }
 
     #[inline(always)]
     fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
-        // SAFETY: as above.
+        // SAFETY: only used on AVX2 CPUs, as for `load_patch`.
         unsafe { mismatch(next, jx, jy, w, p) }
     }
 
     #[inline(always)]
     fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> f32 {
-        // SAFETY: as above.
+        // SAFETY: only used on AVX2 CPUs, as for `load_patch`.
         unsafe { abs_diff_sum(next, jx, jy, w, p) }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::super::wide::{pos, EXACT};
-    use super::super::{weights, Deriv, Kernels, Level, Scalar};
-    use super::*;
-
-    /// A level of smooth texture plus `noise` (0..=255) of xorshift noise:
-    /// noise makes gradients and residuals large enough to overflow the
-    /// exactness bounds, smooth texture keeps them small.
-    fn level(w: usize, h: usize, noise: u32, seed: u64) -> Level {
-        let mut s = seed;
-        let data = (0..w * h)
-            .map(|i| {
-                s ^= s << 13;
-                s ^= s >> 7;
-                s ^= s << 17;
-                let (x, y) = ((i % w) as f64, (i / w) as f64);
-                let smooth = 128.0 + 60.0 * (x * 0.11 + y * 0.07).sin() + 40.0 * (y * 0.13 - x * 0.05).cos();
-                let n = if noise == 0 { 0 } else { (s % (2 * noise as u64 + 1)) as i64 - noise as i64 };
-                (smooth as i64 + n).clamp(0, 255) as u8
-            })
-            .collect();
-        Level::new(data, w, h)
-    }
-
-    /// Every kernel against the scalar reference, bit for bit, at random
-    /// window positions (borders included) and sub-pixel weights; both the
-    /// exact-integer path and the replay path must be taken.
-    #[test]
-    fn kernels_equal_the_scalar_ones_on_both_paths() {
-        if !std::is_x86_feature_detected!("avx2") {
-            return;
-        }
-        let (w, h) = (160, 90);
-        let mut seed = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = move || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            seed
-        };
-        let (mut exact_seen, mut replay_seen, mut tensor_replays) = (0, 0, 0);
-        for (noise, cases) in [(0u32, 400), (12, 400), (90, 400), (255, 200)] {
-            let prev = level(w, h, noise, 1 + noise as u64);
-            let next = level(w, h, noise, 7 + noise as u64);
-            let deriv = Deriv::new(&prev);
-            let (mut sp, mut vp, mut zp) = (Scalar::new_patch(), Avx2::new_patch(), Avx512::new_patch());
-            let avx512 = std::is_x86_feature_detected!("avx512bw");
-            for _ in 0..cases {
-                let mut coord = |n: usize| (rnd() % (n as u64 + 21)) as i32 - 21;
-                let (ix, iy, jx, jy) = (coord(w), coord(h), coord(w), coord(h));
-                let frac = |r: u64| (r % 4096) as f32 / 4096.0;
-                let w0 = weights(frac(rnd()), frac(rnd()));
-                let w1 = weights(frac(rnd()), frac(rnd()));
-                let a = Scalar::load_patch(&prev, &deriv, ix, iy, &w0, &mut sp);
-                let b = Avx2::load_patch(&prev, &deriv, ix, iy, &w0, &mut vp);
-                // Whether ΣX²'s tail went through the replay (its bound is itself).
-                let tail_xx: u64 =
-                    vp.x.iter().map(|r| r.0[16..WIN].iter().map(|&v| (v as i64 * v as i64) as u64).sum::<u64>()).sum();
-                tensor_replays += (tail_xx > EXACT) as usize;
-                assert_eq!(
-                    [a.0.to_bits(), a.1.to_bits(), a.2.to_bits()],
-                    [b.0.to_bits(), b.1.to_bits(), b.2.to_bits()],
-                    "tensor at ({ix}, {iy}), noise {noise}"
-                );
-                let a = Scalar::mismatch(&next, jx, jy, &w1, &mut sp);
-                let b = Avx2::mismatch(&next, jx, jy, &w1, &mut vp);
-                assert_eq!(
-                    [a.0.to_bits(), a.1.to_bits()],
-                    [b.0.to_bits(), b.1.to_bits()],
-                    "mismatch ({ix}, {iy}) → ({jx}, {jy}), noise {noise}"
-                );
-                if avx512 {
-                    Avx512::load_patch(&prev, &deriv, ix, iy, &w0, &mut zp);
-                    let c = Avx512::mismatch(&next, jx, jy, &w1, &mut zp);
-                    assert_eq!(
-                        [a.0.to_bits(), a.1.to_bits()],
-                        [c.0.to_bits(), c.1.to_bits()],
-                        "AVX-512 mismatch ({ix}, {iy}) → ({jx}, {jy}), noise {noise}"
-                    );
-                    assert!(vp.d.iter().zip(zp.d.iter()).all(|(u, v)| u.0[..24] == v.0[..24]), "J − T rows");
-                }
-                // The portable replay of OpenCV's lane order (what wasm
-                // uses) against this module's vector one, on this J − T.
-                // SAFETY: AVX2 checked at the top.
-                let (r, q) = (wide::mismatch_lanes_replay(&vp), unsafe { mismatch_lanes_replay(&vp) });
-                assert_eq!(r.map(f32::to_bits), q.map(f32::to_bits));
-                let a = Scalar::abs_diff_sum(&next, jx, jy, &w1, &mut sp);
-                let b = Avx2::abs_diff_sum(&next, jx, jy, &w1, &mut vp);
-                assert_eq!(a.to_bits(), b.to_bits());
-                // Which path the mismatch's X lanes took (its bound, recomputed).
-                let bound: [u64; 4] = std::array::from_fn(|k| {
-                    (0..WIN)
-                        .map(|y| {
-                            [k, k + 4, k + 8, k + 12]
-                                .iter()
-                                .map(|&c| (vp.d[y].0[pos(c)] as i64 * vp.x[y].0[pos(c)] as i64).unsigned_abs())
-                                .sum::<u64>()
-                        })
-                        .sum()
-                });
-                if bound.iter().all(|&v| v <= EXACT) {
-                    exact_seen += 1;
-                } else {
-                    replay_seen += 1;
-                }
-            }
-        }
-        assert!(exact_seen > 100 && replay_seen > 100, "exact {exact_seen}, replayed {replay_seen}");
-        assert!(tensor_replays > 100 && tensor_replays < 1300, "tensor replays {tensor_replays} of 1400");
     }
 }

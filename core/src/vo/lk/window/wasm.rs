@@ -28,10 +28,15 @@ const M16: v128 = u8x16(0, 1, 2, 3, 8, 9, 10, 11, 2, 3, 4, 5, 10, 11, 12, 13);
 const MT16: v128 = u8x16(0, 1, 2, 3, 2, 3, 4, 5, 4, 5, 6, 7, 6, 7, 8, 9);
 
 /// Byte pairs of an 8-bit row at `p` (reads `p[0..32]`), zero-extended.
+///
+/// # Safety
+/// `p[0..32]` must be readable.
 #[inline(always)]
 unsafe fn pairs_u8(p: *const u8) -> Pairs {
-    let (s0, s1, s2) =
-        (v128_load(p as *const v128), v128_load(p.add(8) as *const v128), v128_load(p.add(16) as *const v128));
+    // SAFETY: the caller vouches for p[0..32]; wasm loads need no alignment.
+    let (s0, s1, s2) = unsafe {
+        (v128_load(p as *const v128), v128_load(p.add(8) as *const v128), v128_load(p.add(16) as *const v128))
+    };
     [
         i8x16_swizzle(s0, MA),
         i8x16_swizzle(s0, MB),
@@ -43,9 +48,14 @@ unsafe fn pairs_u8(p: *const u8) -> Pairs {
 }
 
 /// Element pairs of a 16-bit row at `p` (reads `p[0..28]`).
+///
+/// # Safety
+/// `p[0..28]` must be readable.
 #[inline(always)]
 unsafe fn pairs_i16(p: *const i16) -> Pairs {
-    let at = |k: usize| v128_load(p.add(k) as *const v128);
+    // SAFETY: k ≤ 20 below, so each 8-element load ends within p[0..28],
+    // which the caller vouches for; wasm loads need no alignment.
+    let at = |k: usize| unsafe { v128_load(p.add(k) as *const v128) };
     [
         i8x16_swizzle(at(0), M16),
         i8x16_swizzle(at(2), M16),
@@ -128,9 +138,11 @@ fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &m
     assert!(base + WIN * prev.stride + 32 <= prev.padded.len());
     let (wt, wb) = weight_pairs(w);
     let src = prev.padded[base..].as_ptr();
-    // SAFETY: every load reads inside `prev.padded` (asserted above).
+    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
+    // inside `prev.padded` (asserted above).
     let mut top = unsafe { pairs_u8(src) };
     for y in 0..WIN {
+        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
         let bot = unsafe { pairs_u8(src.add((y + 1) * prev.stride)) };
         store(&mut p.t[y], blend(&top, &bot, wt, wb, 9));
         top = bot;
@@ -141,9 +153,11 @@ fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &m
     let keep = i16x8(-1, -1, -1, -1, -1, 0, 0, 0);
     for (plane, out, mag) in [(&deriv.ix, &mut p.x, &mut p.ax), (&deriv.iy, &mut p.y, &mut p.ay)] {
         let src = plane[dbase..].as_ptr();
-        // SAFETY: every load reads inside the plane (asserted above).
+        // SAFETY: rows 0 ..= 21, whose last 28 elements end inside
+        // the plane (asserted above).
         let mut top = unsafe { pairs_i16(src) };
         for y in 0..WIN {
+            // SAFETY: row y + 1 ≤ 21 of the same window (see above).
             let bot = unsafe { pairs_i16(src.add((y + 1) * deriv.stride)) };
             let mut v = blend(&top, &bot, wt, wb, 14);
             v[2] = v128_and(v[2], keep);
@@ -177,9 +191,11 @@ fn for_each_difference(next: &Level, jx: i32, jy: i32, w: &[i32; 4], t: &Win16, 
     assert!(base + WIN * next.stride + 32 <= next.padded.len());
     let (wt, wb) = weight_pairs(w);
     let src = next.padded[base..].as_ptr();
-    // SAFETY: every load reads inside `next.padded` (asserted above).
+    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
+    // inside `next.padded` (asserted above).
     let mut top = unsafe { pairs_u8(src) };
     for (y, trow) in t.iter().enumerate() {
+        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
         let bot = unsafe { pairs_u8(src.add((y + 1) * next.stride)) };
         let j = blend(&top, &bot, wt, wb, 9);
         let t = load(trow);
