@@ -453,8 +453,8 @@ fn reference_blur(src: &siftlab_core::sift::image::Plane, sigma: f64) -> Vec<f32
         for x in 0..w {
             let at = |t: usize| src.data[y * w + reflect(x as isize + t as isize - r as isize, w)];
             let mut a = at(0) * k[0];
-            for t in 1..k.len() {
-                a = fma_emulated(at(t), k[t], a);
+            for (t, &kt) in k.iter().enumerate().skip(1) {
+                a = fma_emulated(at(t), kt, a);
             }
             tmp[y * w + x] = a;
         }
@@ -490,7 +490,9 @@ fn blur_in_the_browser_equals_the_scalar_filter() {
         state ^= state << 17;
         state
     };
-    let cases: [(&str, usize, usize, fn(u64) -> f32); 4] = [
+    /// (name, width, height, pixel from a random draw)
+    type Case = (&'static str, usize, usize, fn(u64) -> f32);
+    let cases: [Case; 4] = [
         ("8-bit image", 203, 61, |r| (r % 256) as f32),
         ("8-bit image with black areas", 97, 40, |r| if r % 3 == 0 { 0.0 } else { (r % 256) as f32 }),
         ("negative values", 131, 37, |r| (r % 512) as f32 - 255.5),
