@@ -3,9 +3,8 @@
 //! start-up window, and a cache of finished frames keyed by the file's content.
 
 use crate::msg::{FromWorker, SiftResult, ToWorker};
-use siftlab_core::sift::Features;
 use std::cell::RefCell;
-use std::collections::{HashMap, VecDeque};
+use std::collections::HashMap;
 use std::sync::Arc;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -15,14 +14,8 @@ use wasm_bindgen::JsCast;
 pub struct FrameData {
     /// What the user loaded (file name or `gray/00/image_0/000001.png`).
     pub label: String,
-    pub width: usize,
-    pub height: usize,
-    pub gray: Vec<u8>,
-    pub features: Features,
-    pub decode_ms: f64,
-    pub sift_ms: f64,
-    /// How the worker computed SIFT's multiply-adds (shown with the timing).
-    pub engine: String,
+    /// The worker's result (its fields read through `Deref`: `frame.features`, `frame.gray`, …).
+    pub sift: SiftResult,
     /// The file's bytes, to re-run SIFT when the OpenCV SIMD width changes.
     pub bytes: Arc<Vec<u8>>,
     pub lanes: usize,
@@ -31,19 +24,16 @@ pub struct FrameData {
 pub type Frame = Arc<FrameData>;
 
 impl FrameData {
-    pub fn from_result(label: String, r: SiftResult, bytes: Arc<Vec<u8>>, lanes: usize) -> Self {
-        FrameData {
-            bytes,
-            lanes,
-            label,
-            width: r.width,
-            height: r.height,
-            gray: r.gray,
-            features: r.features,
-            decode_ms: r.decode_ms,
-            sift_ms: r.sift_ms,
-            engine: r.engine,
-        }
+    pub fn from_result(label: String, sift: SiftResult, bytes: Arc<Vec<u8>>, lanes: usize) -> Self {
+        FrameData { label, sift, bytes, lanes }
+    }
+}
+
+impl std::ops::Deref for FrameData {
+    type Target = SiftResult;
+
+    fn deref(&self) -> &SiftResult {
+        &self.sift
     }
 }
 
@@ -56,6 +46,74 @@ pub fn content_key(bytes: &[u8], lanes: usize) -> u64 {
         h = h.wrapping_mul(0x0100_0000_01b3);
     }
     h ^ (bytes.len() as u64).rotate_left(32)
+}
+
+/// One module worker running the worker script, and the messages waiting for
+/// it to say it is ready (nothing sent during its start-up is lost). The pool's
+/// SIFT workers and an odometry run's workers are all of this kind; dropping
+/// one terminates its worker.
+struct WorkerHandle {
+    worker: web_sys::Worker,
+    ready: bool,
+    queue: Vec<JsValue>,
+    // Keeps the JS callbacks alive as long as the worker.
+    _handlers: [Closure<dyn FnMut(JsValue)>; 2],
+}
+
+impl WorkerHandle {
+    /// Starts a module worker running `script`: its messages, decoded, go to
+    /// `on_message` (an undecodable one is logged); a failed start or a panic
+    /// (wasm aborts, the instance is unusable) calls `on_crash`.
+    fn start(
+        script: &str,
+        on_message: impl Fn(FromWorker) + 'static,
+        on_crash: impl Fn() + 'static,
+    ) -> Result<WorkerHandle, String> {
+        let opts = web_sys::WorkerOptions::new();
+        opts.set_type(web_sys::WorkerType::Module);
+        let worker =
+            web_sys::Worker::new_with_options(script, &opts).map_err(|e| format!("cannot start a worker: {e:?}"))?;
+        let on_message = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
+            let data = ev.unchecked_into::<web_sys::MessageEvent>().data();
+            match FromWorker::from_js(&data) {
+                Ok(m) => on_message(m),
+                Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
+            }
+        });
+        let on_error = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
+            if let Some(e) = ev.dyn_ref::<web_sys::ErrorEvent>() {
+                e.prevent_default();
+            }
+            on_crash();
+        });
+        worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
+        worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
+        Ok(WorkerHandle { worker, ready: false, queue: Vec::new(), _handlers: [on_message, on_error] })
+    }
+
+    /// Posts `m`, or queues it until the worker is ready.
+    fn send(&mut self, m: ToWorker) {
+        let m = m.to_js();
+        if self.ready {
+            let _ = self.worker.post_message(&m);
+        } else {
+            self.queue.push(m);
+        }
+    }
+
+    /// The worker said `Ready`: what was queued goes out, in order.
+    fn set_ready(&mut self) {
+        self.ready = true;
+        for m in std::mem::take(&mut self.queue) {
+            let _ = self.worker.post_message(&m);
+        }
+    }
+}
+
+impl Drop for WorkerHandle {
+    fn drop(&mut self) {
+        self.worker.terminate();
+    }
 }
 
 type Progress = Box<dyn Fn(String)>;
@@ -72,13 +130,10 @@ struct Job {
     waiters: Vec<Waiter>,
 }
 
+/// A SIFT worker of the pool and the number of jobs it has.
 struct Slot {
-    worker: web_sys::Worker,
-    ready: bool,
-    queue: VecDeque<JsValue>,
+    handle: WorkerHandle,
     load: usize,
-    // Keeps the JS callbacks alive as long as the worker.
-    _handlers: Vec<Closure<dyn FnMut(JsValue)>>,
 }
 
 #[derive(Default)]
@@ -102,55 +157,18 @@ thread_local! {
 /// Number of workers: one per frame of a pair.
 const WORKERS: usize = 2;
 
-/// Starts a module worker running `script`: its messages, decoded, go to
-/// `on_message` (an undecodable one is logged); a failed start or a panic
-/// (wasm aborts, the instance is unusable) calls `on_crash`. The closures
-/// must live as long as the worker.
-fn start_worker(
-    script: &str,
-    on_message: impl Fn(FromWorker) + 'static,
-    on_crash: impl Fn() + 'static,
-) -> Result<(web_sys::Worker, Vec<Closure<dyn FnMut(JsValue)>>), String> {
-    let opts = web_sys::WorkerOptions::new();
-    opts.set_type(web_sys::WorkerType::Module);
-    let worker = web_sys::Worker::new_with_options(script, &opts).map_err(|e| format!("cannot start a worker: {e:?}"))?;
-    let on_message = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
-        let data = ev.unchecked_into::<web_sys::MessageEvent>().data();
-        match FromWorker::from_js(&data) {
-            Ok(m) => on_message(m),
-            Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
-        }
-    });
-    let on_error = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
-        if let Some(e) = ev.dyn_ref::<web_sys::ErrorEvent>() {
-            e.prevent_default();
-        }
-        on_crash();
-    });
-    worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
-    worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
-    Ok((worker, vec![on_message, on_error]))
-}
-
 fn spawn(index: usize, script: &str) -> Result<Slot, String> {
-    let (worker, handlers) = start_worker(script, move |m| on_worker_message(index, m), move || on_worker_crash(index))?;
-    Ok(Slot { worker, ready: false, queue: VecDeque::new(), load: 0, _handlers: handlers })
+    let handle = WorkerHandle::start(script, move |m| on_worker_message(index, m), move || on_worker_crash(index))?;
+    Ok(Slot { handle, load: 0 })
 }
 
 fn on_worker_message(index: usize, m: FromWorker) {
     match m {
-        FromWorker::Ready => {
-            let queued: Vec<(web_sys::Worker, JsValue)> = POOL.with(|p| {
-                let mut p = p.borrow_mut();
-                let Some(Some(slot)) = p.slots.get_mut(index) else { return vec![] };
-                slot.ready = true;
-                let w = slot.worker.clone();
-                slot.queue.drain(..).map(|m| (w.clone(), m)).collect()
-            });
-            for (w, m) in queued {
-                let _ = w.post_message(&m);
+        FromWorker::Ready => POOL.with(|p| {
+            if let Some(Some(slot)) = p.borrow_mut().slots.get_mut(index) {
+                slot.handle.set_ready();
             }
-        }
+        }),
         FromWorker::Progress { id, stage } => with_progress(id, &stage),
         FromWorker::Done { id, result } => finish(id, Ok(result)),
         FromWorker::Failed { id, message } => finish(id, Err(message)),
@@ -197,20 +215,15 @@ fn finish(id: u32, r: Result<SiftResult, String>) {
 }
 
 fn on_worker_crash(index: usize) {
-    let failed: Vec<u32> = POOL.with(|p| {
+    let (old, failed): (Option<Slot>, Vec<u32>) = POOL.with(|p| {
         let mut p = p.borrow_mut();
-        if let Some(slot) = p.slots.get_mut(index) {
-            if let Some(old) = slot.take() {
-                old.worker.terminate();
-            }
-        }
-        p.jobs.iter().filter(|(_, j)| j.slot == index).map(|(id, _)| *id).collect()
+        let old = p.slots.get_mut(index).and_then(Option::take);
+        (old, p.jobs.iter().filter(|(_, j)| j.slot == index).map(|(id, _)| *id).collect())
     });
+    // Dropping the slot terminates its worker.
+    drop(old);
     for id in failed {
-        finish(
-            id,
-            Err("the SIFT worker failed (it could not start, or ran out of memory); try again".into()),
-        );
+        finish(id, Err("the SIFT worker failed (it could not start, or ran out of memory); try again".into()));
     }
 }
 
@@ -247,12 +260,12 @@ pub fn sift(
         return;
     }
     let waiter = Waiter { progress: Box::new(progress), done: Box::new(done) };
-    let started: Result<Option<(web_sys::Worker, JsValue)>, (String, Waiter)> = POOL.with(|p| {
+    let failed: Result<(), (String, Waiter)> = POOL.with(|p| {
         let mut p = p.borrow_mut();
         if let Some(id) = p.in_flight.get(&key).copied() {
             if let Some(job) = p.jobs.get_mut(&id) {
                 job.waiters.push(waiter);
-                return Ok(None);
+                return Ok(());
             }
         }
         p.slots.resize_with(WORKERS, || None);
@@ -271,22 +284,14 @@ pub fn sift(
         let id = p.next_id;
         p.jobs.insert(id, Job { key, slot, waiters: vec![waiter] });
         p.in_flight.insert(key, id);
-        let msg = ToWorker::Sift { id, bytes, lanes: lanes as u32 }.to_js();
-        let Some(s) = p.slots[slot].as_mut() else { return Ok(None) };
-        s.load += 1;
-        if s.ready {
-            Ok(Some((s.worker.clone(), msg)))
-        } else {
-            s.queue.push_back(msg);
-            Ok(None)
+        if let Some(s) = p.slots[slot].as_mut() {
+            s.load += 1;
+            s.handle.send(ToWorker::Sift { id, bytes, lanes: lanes as u32 });
         }
+        Ok(())
     });
-    match started {
-        Ok(Some((w, msg))) => {
-            let _ = w.post_message(&msg);
-        }
-        Ok(None) => {}
-        Err((e, w)) => (w.done)(Err(e)),
+    if let Err((e, w)) = failed {
+        (w.done)(Err(e));
     }
 }
 
@@ -298,8 +303,8 @@ pub fn sift(
 /// so the results are those of the one-worker loop (and of the CLI), only
 /// sooner. Dropping it (a new run, or [`stop_vo`]) terminates the workers.
 struct VoRun {
-    tracker: Peer,
-    helpers: Vec<Peer>,
+    tracker: WorkerHandle,
+    helpers: Vec<Helper>,
     frames: Vec<Vec<u8>>,
     /// Per frame: `None` until detected; `Some(None)` for frame 1, which never re-detects.
     detected: Vec<Option<Option<Vec<[f32; 2]>>>>,
@@ -310,35 +315,13 @@ struct VoRun {
     on_event: std::rc::Rc<dyn Fn(FromWorker)>,
 }
 
-/// A worker and the messages waiting for it to be ready.
-struct Peer {
-    worker: web_sys::Worker,
-    ready: bool,
-    queue: Vec<JsValue>,
-    /// The frame a helper is detecting.
+/// A detection helper of an odometry run.
+struct Helper {
+    handle: WorkerHandle,
+    /// The frame it is detecting.
     busy: Option<usize>,
     /// A helper that crashed gets no more frames.
     dead: bool,
-    _handlers: Vec<Closure<dyn FnMut(JsValue)>>,
-}
-
-impl Peer {
-    fn send(&mut self, m: JsValue) {
-        if self.ready {
-            let _ = self.worker.post_message(&m);
-        } else {
-            self.queue.push(m);
-        }
-    }
-}
-
-impl Drop for VoRun {
-    fn drop(&mut self) {
-        self.tracker.worker.terminate();
-        for h in &self.helpers {
-            h.worker.terminate();
-        }
-    }
 }
 
 thread_local! {
@@ -360,13 +343,12 @@ const VO_HELPERS: usize = 2;
 pub fn run_vo(frames: Vec<Vec<u8>>, poses: String, on_event: impl Fn(FromWorker) + 'static) -> Result<(), String> {
     stop_vo();
     let script = POOL.with(|p| p.borrow().script.clone());
-    let spawn_peer = |role: Role| -> Result<Peer, String> {
-        let (worker, handlers) = start_worker(&script, move |m| on_vo_message(role, m), move || on_vo_crash(role))?;
-        Ok(Peer { worker, ready: false, queue: Vec::new(), busy: None, dead: false, _handlers: handlers })
-    };
-    let mut tracker = spawn_peer(Role::Tracker)?;
-    let helpers = (0..VO_HELPERS).map(|i| spawn_peer(Role::Helper(i))).collect::<Result<Vec<_>, _>>()?;
-    tracker.send(ToWorker::VoStart { id: VO_ID, total: frames.len() as u32, poses }.to_js());
+    let start = |role: Role| WorkerHandle::start(&script, move |m| on_vo_message(role, m), move || on_vo_crash(role));
+    let mut tracker = start(Role::Tracker)?;
+    let helpers = (0..VO_HELPERS)
+        .map(|i| start(Role::Helper(i)).map(|handle| Helper { handle, busy: None, dead: false }))
+        .collect::<Result<Vec<_>, _>>()?;
+    tracker.send(ToWorker::VoStart { id: VO_ID, total: frames.len() as u32, poses });
     let mut detected = vec![None; frames.len()];
     if let Some(d) = detected.get_mut(1) {
         *d = Some(None);
@@ -405,7 +387,7 @@ impl VoRun {
             let i = self.next_detect;
             self.next_detect += 1;
             self.helpers[h].busy = Some(i);
-            self.helpers[h].send(ToWorker::Detect { frame: i as u32, bytes: self.frames[i].clone() }.to_js());
+            self.helpers[h].handle.send(ToWorker::Detect { frame: i as u32, bytes: self.frames[i].clone() });
         }
         if self.tracking || self.next_track >= self.frames.len() {
             return;
@@ -414,7 +396,7 @@ impl VoRun {
         let Some(points) = self.detected[i].take() else { return };
         self.next_track += 1;
         self.tracking = true;
-        self.tracker.send(ToWorker::VoFrame { id: VO_ID, frame: i as u32, bytes: self.frames[i].clone(), points }.to_js());
+        self.tracker.send(ToWorker::VoFrame { id: VO_ID, frame: i as u32, bytes: self.frames[i].clone(), points });
     }
 
     /// A helper that could not detect its frame (a broken file, or the
@@ -463,13 +445,9 @@ fn on_vo_message(role: Role, m: FromWorker) {
         let mut r = r.borrow_mut();
         let run = r.as_mut()?;
         if let FromWorker::Ready = m {
-            let peer = match role {
-                Role::Tracker => &mut run.tracker,
-                Role::Helper(h) => &mut run.helpers[h],
-            };
-            peer.ready = true;
-            for q in std::mem::take(&mut peer.queue) {
-                let _ = peer.worker.post_message(&q);
+            match role {
+                Role::Tracker => run.tracker.set_ready(),
+                Role::Helper(h) => run.helpers[h].handle.set_ready(),
             }
             return None;
         }

@@ -1,6 +1,9 @@
 //! Automarker-style questions: (frame, feature, strategy, threshold) drawn from
 //! a seed, so the same link gives every student the same questions.
 
+use crate::state::get_info_command;
+use siftlab_core::matching::strategy::StrategyKind;
+
 /// SplitMix64: tiny, well distributed, and identical on every platform.
 #[derive(Debug, Clone)]
 pub struct Rng(u64);
@@ -36,7 +39,7 @@ pub struct Question {
     /// Where in [0, 1) the feature id falls; the id is `floor(pos * count)` once
     /// the frame's keypoint count is known.
     pub feature_pos: f64,
-    pub algo: &'static str,
+    pub algo: StrategyKind,
     /// Threshold text as the student would type it after `-t` (empty = none).
     pub threshold: String,
 }
@@ -47,8 +50,7 @@ impl Question {
     }
 
     pub fn command(&self, keypoints: usize) -> String {
-        let t = if self.threshold.is_empty() { String::new() } else { format!(" -t {}", self.threshold) };
-        format!("get_info -a {}{t} {} {}", self.algo, self.frame_id, self.feature(keypoints))
+        get_info_command(self.algo, &self.threshold, &self.frame_id.to_string(), &self.feature(keypoints).to_string())
     }
 }
 
@@ -65,15 +67,15 @@ pub fn question(seed: u64, q: u32, frames: &[u32]) -> Option<Question> {
     let frame_id = pairs[rng.range(0, pairs.len() as u64 - 1) as usize];
     let feature_pos = rng.unit();
     let (algo, threshold) = match rng.range(0, 2) {
-        0 => ("dt", (rng.range(30, 64) * 5).to_string()),
+        0 => (StrategyKind::Dt, (rng.range(30, 64) * 5).to_string()),
         1 => {
             if rng.range(0, 2) == 0 {
-                ("nn", String::new())
+                (StrategyKind::Nn, String::new())
             } else {
-                ("nn", (rng.range(24, 60) * 5).to_string())
+                (StrategyKind::Nn, (rng.range(24, 60) * 5).to_string())
             }
         }
-        _ => ("nndr", format!("{:.2}", rng.range(50, 95) as f64 / 100.0)),
+        _ => (StrategyKind::Nndr, format!("{:.2}", rng.range(50, 95) as f64 / 100.0)),
     };
     Some(Question { frame_id, feature_pos, algo, threshold })
 }
@@ -100,9 +102,11 @@ mod tests {
             assert!((0.0..1.0).contains(&a.feature_pos));
             assert!(a.feature(1500) < 1500);
             match a.algo {
-                "dt" => assert!((150..=320).contains(&a.threshold.parse::<u32>().unwrap())),
-                "nn" => assert!(a.threshold.is_empty() || (120..=300).contains(&a.threshold.parse::<u32>().unwrap())),
-                _ => assert!((0.5..=0.95).contains(&a.threshold.parse::<f64>().unwrap())),
+                StrategyKind::Dt => assert!((150..=320).contains(&a.threshold.parse::<u32>().unwrap())),
+                StrategyKind::Nn => {
+                    assert!(a.threshold.is_empty() || (120..=300).contains(&a.threshold.parse::<u32>().unwrap()))
+                }
+                StrategyKind::Nndr => assert!((0.5..=0.95).contains(&a.threshold.parse::<f64>().unwrap())),
             }
         }
         assert_ne!(question(7, 1, &frames), question(8, 1, &frames));

@@ -13,6 +13,7 @@ pub mod frameset;
 pub mod lab_manual;
 pub mod loading;
 pub mod msg;
+pub mod plot;
 pub mod pylit;
 pub mod selfcheck;
 pub mod state;

@@ -16,9 +16,6 @@ pub enum ToWorker {
     /// Decode `bytes` (PNG/JPEG) as the core does and run SIFT with the lab's
     /// parameters; `lanes` is OpenCV's SIMD width to reproduce (8 = AVX2, 16 = AVX-512).
     Sift { id: u32, bytes: Vec<u8>, lanes: u32 },
-    /// Run the lab's visual odometry over `frames` (frame 0 first) with the
-    /// ground-truth poses (`poses/00.txt` text) for the scale.
-    Vo { id: u32, frames: Vec<Vec<u8>>, poses: String },
     /// The lab's keypoint detection alone (`SIFT.detect` positions, in order) on
     /// frame `frame` of an odometry run: detection helpers run it ahead of the
     /// tracking worker, two frames at a time.
@@ -49,17 +46,42 @@ pub enum FromWorker {
     /// The worker's wasm is initialised and it listens.
     Ready,
     /// A job reached a new stage (shown to the user as progress).
-    Progress { id: u32, stage: String },
-    Done { id: u32, result: SiftResult },
+    Progress {
+        id: u32,
+        stage: String,
+    },
+    Done {
+        id: u32,
+        result: SiftResult,
+    },
     /// A user-facing message (the core's `Error` Display).
-    Failed { id: u32, message: String },
+    Failed {
+        id: u32,
+        message: String,
+    },
     /// One odometry step done: the estimated and true camera positions.
-    VoStep { id: u32, frame: u32, total: u32, position: [f64; 3], truth: Option<[f64; 3]>, tracked: u32, redetected: bool },
+    VoStep {
+        id: u32,
+        frame: u32,
+        total: u32,
+        position: [f64; 3],
+        truth: Option<[f64; 3]>,
+        tracked: u32,
+        redetected: bool,
+    },
     /// The run is over: trajectory error (RMSE, GT scale, no alignment) and
     /// the lab's trajectory window as PNG (the core's renderer, as the CLI writes it).
-    VoDone { id: u32, ate: f64, png: Vec<u8>, ms: f64 },
+    VoDone {
+        id: u32,
+        ate: f64,
+        png: Vec<u8>,
+        ms: f64,
+    },
     /// The keypoint positions of a [`ToWorker::Detect`] frame.
-    Detected { frame: u32, points: Vec<[f32; 2]> },
+    Detected {
+        frame: u32,
+        points: Vec<[f32; 2]>,
+    },
 }
 
 fn set(o: &Object, k: &str, v: &JsValue) {
@@ -95,7 +117,8 @@ fn get_vec3(o: &JsValue, k: &str) -> Result<Option<[f64; 3]>, String> {
     if v.is_null() || v.is_undefined() {
         return Ok(None);
     }
-    let a = v.dyn_into::<js_sys::Float64Array>().map_err(|_| format!("message field {k} is not a Float64Array"))?.to_vec();
+    let a =
+        v.dyn_into::<js_sys::Float64Array>().map_err(|_| format!("message field {k} is not a Float64Array"))?.to_vec();
     <[f64; 3]>::try_from(a.as_slice()).map(Some).map_err(|_| format!("message field {k} needs 3 numbers"))
 }
 
@@ -134,16 +157,6 @@ impl ToWorker {
                 set(&o, "lanes", &(*lanes).into());
                 set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
             }
-            ToWorker::Vo { id, frames, poses } => {
-                set(&o, "type", &"vo".into());
-                set(&o, "id", &(*id).into());
-                let arr = js_sys::Array::new();
-                for f in frames {
-                    arr.push(&Uint8Array::from(f.as_slice()));
-                }
-                set(&o, "frames", &arr);
-                set(&o, "poses", &poses.as_str().into());
-            }
             ToWorker::Detect { frame, bytes } => {
                 set(&o, "type", &"detect".into());
                 set(&o, "frame", &(*frame).into());
@@ -168,22 +181,15 @@ impl ToWorker {
 
     pub fn from_js(v: &JsValue) -> Result<Self, String> {
         match kind(v)?.as_str() {
-            "sift" => Ok(ToWorker::Sift {
-                id: get_u32(v, "id")?,
-                bytes: get_bytes(v, "bytes")?,
-                lanes: get_u32(v, "lanes")?,
-            }),
-            "vo" => {
-                let frames = get(v, "frames")?
-                    .dyn_into::<js_sys::Array>()
-                    .map_err(|_| "message field frames is not an array".to_string())?
-                    .iter()
-                    .map(|f| f.dyn_into::<Uint8Array>().map(|a| a.to_vec()).map_err(|_| "a frame is not a Uint8Array".to_string()))
-                    .collect::<Result<Vec<_>, _>>()?;
-                Ok(ToWorker::Vo { id: get_u32(v, "id")?, frames, poses: get_str(v, "poses")? })
+            "sift" => {
+                Ok(ToWorker::Sift { id: get_u32(v, "id")?, bytes: get_bytes(v, "bytes")?, lanes: get_u32(v, "lanes")? })
             }
             "detect" => Ok(ToWorker::Detect { frame: get_u32(v, "frame")?, bytes: get_bytes(v, "bytes")? }),
-            "voStart" => Ok(ToWorker::VoStart { id: get_u32(v, "id")?, total: get_u32(v, "total")?, poses: get_str(v, "poses")? }),
+            "voStart" => Ok(ToWorker::VoStart {
+                id: get_u32(v, "id")?,
+                total: get_u32(v, "total")?,
+                poses: get_str(v, "poses")?,
+            }),
             "voFrame" => Ok(ToWorker::VoFrame {
                 id: get_u32(v, "id")?,
                 frame: get_u32(v, "frame")?,
@@ -311,14 +317,7 @@ impl FromWorker {
                 let keypoints = kp
                     .chunks_exact(KP_FLOATS)
                     .zip(&octave)
-                    .map(|(f, &octave)| KeyPoint {
-                        x: f[0],
-                        y: f[1],
-                        size: f[2],
-                        angle: f[3],
-                        response: f[4],
-                        octave,
-                    })
+                    .map(|(f, &octave)| KeyPoint { x: f[0], y: f[1], size: f[2], angle: f[3], response: f[4], octave })
                     .collect();
                 let descriptors = desc
                     .chunks_exact(128)

@@ -46,7 +46,8 @@ fn read(v: &Py) -> Result<Answer<'_>, String> {
         .iter()
         .map(|p| p.items().map(|xy| xy.iter().collect::<Vec<_>>()).ok_or("every matched point should be a pair (x, y)"))
         .collect::<Result<Vec<_>, _>>()?;
-    let distances: Vec<&Py> = parts[2].items().ok_or("the third part should be a list of distances [d, …]")?.iter().collect();
+    let distances: Vec<&Py> =
+        parts[2].items().ok_or("the third part should be a list of distances [d, …]")?.iter().collect();
     Ok(Answer { query, points, distances })
 }
 
@@ -182,9 +183,19 @@ fn check_distances(a: &Answer, truth: &MatchInfo) -> FieldCheck {
             "the right values, printed differently: {shown} vs {} — the lab prints m.distance as a Python float (float(m.distance)), not as a numpy float32",
             py_f32(want[i])
         )
-    } else if a.distances.iter().zip(want).all(|(d, &w)| d.number().is_some_and(|x| (x - (w as f64) * (w as f64)).abs() <= 0.5)) {
+    } else if a
+        .distances
+        .iter()
+        .zip(want)
+        .all(|(d, &w)| d.number().is_some_and(|x| (x - (w as f64) * (w as f64)).abs() <= 0.5))
+    {
         "these are squared distances: BFMatcher() uses NORM_L2, the square root of the sum of squares".to_string()
-    } else if a.distances.iter().zip(want).all(|(d, &w)| matches!(d, Py::Int(i) if *i as f64 == (w as f64).trunc() || *i as f64 == (w as f64).round())) {
+    } else if a
+        .distances
+        .iter()
+        .zip(want)
+        .all(|(d, &w)| matches!(d, Py::Int(i) if *i as f64 == (w as f64).trunc() || *i as f64 == (w as f64).round()))
+    {
         "the distances were converted to int: keep them as floats".to_string()
     } else {
         let i = a.distances.iter().zip(want).position(|(d, &w)| !dist_value_eq(d, w)).unwrap_or(0);
@@ -199,7 +210,12 @@ fn check_distances(a: &Answer, truth: &MatchInfo) -> FieldCheck {
 
 /// Diagnoses `answer` against the core's `truth` and its `mistakes` (from
 /// `mistaken_answers`); `query_float` is the query keypoint's float pt.
-pub fn diagnose(answer: &str, truth: &MatchInfo, mistakes: &[(Mistake, MatchInfo)], query_float: Option<(f32, f32)>) -> Diagnosis {
+pub fn diagnose(
+    answer: &str,
+    truth: &MatchInfo,
+    mistakes: &[(Mistake, MatchInfo)],
+    query_float: Option<(f32, f32)>,
+) -> Diagnosis {
     let parsed = match pylit::parse(answer) {
         Ok(v) => v,
         Err(e) => {
@@ -244,7 +260,12 @@ mod tests {
 
     #[test]
     fn the_lab_answer_is_correct() {
-        let d = diagnose("ret value: ((523, 181), [(517, 183), (600, 12)], [61.400001525878906, 105.0])", &truth(), &[], None);
+        let d = diagnose(
+            "ret value: ((523, 181), [(517, 183), (600, 12)], [61.400001525878906, 105.0])",
+            &truth(),
+            &[],
+            None,
+        );
         assert!(d.correct, "{d:?}");
         assert!(d.fields.iter().all(|f| f.ok));
     }
@@ -255,7 +276,12 @@ mod tests {
         assert!(!d.correct);
         assert!(d.fields[0].note.contains("float coordinates"), "{:?}", d.fields[0]);
         assert!(d.fields[1].ok && d.fields[2].ok);
-        let d = diagnose("((524, 181), [(517, 183), (600, 12)], [61.400001525878906, 105.0])", &truth(), &[], Some((523.7, 181.2)));
+        let d = diagnose(
+            "((524, 181), [(517, 183), (600, 12)], [61.400001525878906, 105.0])",
+            &truth(),
+            &[],
+            Some((523.7, 181.2)),
+        );
         assert!(d.fields[0].note.contains("rounded"), "{:?}", d.fields[0]);
     }
 
@@ -281,7 +307,12 @@ mod tests {
     #[test]
     fn matches_a_core_mistake() {
         let wrong = MatchInfo { query: (523, 181), points: vec![(517, 183)], distances: vec![61.4] };
-        let d = diagnose(&wrong.to_string(), &truth(), &[(Mistake::NnMoreThanOne, truth()), (Mistake::LessOrEqual, wrong.clone())], None);
+        let d = diagnose(
+            &wrong.to_string(),
+            &truth(),
+            &[(Mistake::NnMoreThanOne, truth()), (Mistake::LessOrEqual, wrong.clone())],
+            None,
+        );
         assert!(!d.correct);
         assert_eq!(d.likely, vec![Mistake::LessOrEqual.describe().to_string()]);
     }

@@ -3,6 +3,7 @@
 
 use crate::client::Frame;
 use leptos::prelude::*;
+use siftlab_core::matching::strategy::StrategyKind;
 use siftlab_core::matching::{explain, Explanation, Strategy};
 use siftlab_core::sift::KeyPoint;
 use std::sync::Arc;
@@ -80,11 +81,37 @@ impl PartialEq for Analysis {
 }
 
 /// The default threshold text shown when a strategy is picked first.
-pub fn default_threshold(algo: &str) -> &'static str {
-    match algo {
-        "dt" => "100",
-        "nndr" => "0.8",
-        _ => "",
+pub fn default_threshold(kind: StrategyKind) -> &'static str {
+    match kind {
+        StrategyKind::Dt => "100",
+        StrategyKind::Nn => "",
+        StrategyKind::Nndr => "0.8",
+    }
+}
+
+/// The threshold's range as the controls hint it.
+pub fn threshold_hint(kind: StrategyKind) -> &'static str {
+    match kind {
+        StrategyKind::Dt => "0 … 500",
+        StrategyKind::Nn => "0 … 500, empty = none",
+        StrategyKind::Nndr => "0 … 1",
+    }
+}
+
+/// The lab's command line for these settings, as a student types it:
+/// `get_info -a ALGO [-t T] FRAME_ID FEATURE` (no `-t` when the text is blank).
+pub fn get_info_command(kind: StrategyKind, threshold: &str, frame: &str, feature: &str) -> String {
+    let t = threshold.trim();
+    let t = if t.is_empty() { String::new() } else { format!(" -t {t}") };
+    format!("get_info -a {}{t} {frame} {}", kind.name(), feature.trim())
+}
+
+/// The menu's label for a strategy.
+pub fn strategy_label(kind: StrategyKind) -> &'static str {
+    match kind {
+        StrategyKind::Dt => "dt — distance threshold",
+        StrategyKind::Nn => "nn — nearest neighbour",
+        StrategyKind::Nndr => "nndr — nearest-neighbour distance ratio",
     }
 }
 
@@ -95,6 +122,11 @@ pub fn parse_threshold(text: &str) -> Result<Option<f64>, String> {
         return Ok(None);
     }
     t.parse::<f64>().map(Some).map_err(|_| format!("threshold {t:?} is not a number"))
+}
+
+/// A strategy from its kind and the threshold text, validated by the core.
+pub fn parse_strategy(kind: StrategyKind, threshold: &str) -> Result<Strategy, String> {
+    Strategy::parse(kind.name(), parse_threshold(threshold)?).map_err(|e| e.to_string())
 }
 
 pub fn parse_feature(text: &str) -> Result<usize, String> {
@@ -109,7 +141,7 @@ pub struct Lab {
     pub source: RwSignal<Source>,
     /// The lab's FRAME_ID (demo/folder): frames FRAME_ID-1 and FRAME_ID.
     pub frame_id: RwSignal<u32>,
-    pub algo: RwSignal<String>,
+    pub algo: RwSignal<StrategyKind>,
     /// Threshold text per strategy, in the order dt, nn, nndr.
     pub thresholds: RwSignal<[String; 3]>,
     pub feature_text: RwSignal<String>,
@@ -128,27 +160,24 @@ pub struct Lab {
     pub analysis: Memo<Option<Result<Analysis, String>>>,
 }
 
-fn algo_index(algo: &str) -> usize {
-    match algo {
-        "dt" => 0,
-        "nn" => 1,
-        _ => 2,
-    }
+/// Where a strategy's threshold text sits in [`Lab::thresholds`].
+fn slot(kind: StrategyKind) -> usize {
+    StrategyKind::ALL.iter().position(|&k| k == kind).unwrap_or(0)
 }
 
 impl Lab {
     pub fn new() -> Self {
         let prev = RwSignal::new(None::<Frame>);
         let cur = RwSignal::new(None::<Frame>);
-        let algo = RwSignal::new("nndr".to_string());
-        let thresholds = RwSignal::new(["100".to_string(), String::new(), "0.8".to_string()]);
+        let algo = RwSignal::new(StrategyKind::Nndr);
+        let thresholds = RwSignal::new(StrategyKind::ALL.map(|k| default_threshold(k).to_string()));
         let feature_text = RwSignal::new("0".to_string());
         let analysis = Memo::new(move |_| {
             let (p, c) = (prev.get()?, cur.get()?);
             let algo = algo.get();
-            let t = thresholds.with(|t| t[algo_index(&algo)].clone());
+            let t = thresholds.with(|t| t[slot(algo)].clone());
             let feature = feature_text.get();
-            Some(analyse(&p, &c, &algo, &t, &feature))
+            Some(analyse(&p, &c, algo, &t, &feature))
         });
         Lab {
             prev,
@@ -180,11 +209,11 @@ impl Lab {
     /// The threshold text of the current strategy.
     pub fn threshold(&self) -> String {
         let algo = self.algo.get();
-        self.thresholds.with(|t| t[algo_index(&algo)].clone())
+        self.thresholds.with(|t| t[slot(algo)].clone())
     }
 
     pub fn set_threshold(&self, text: String) {
-        let i = algo_index(&self.algo.get_untracked());
+        let i = slot(self.algo.get_untracked());
         self.thresholds.update(|t| t[i] = text);
     }
 
@@ -214,10 +243,15 @@ impl Default for Lab {
 /// Runs the core on the current settings: validation (`Strategy::parse`, the
 /// feature range), the strategy, `matching_info` and its formatting all live
 /// in the core; this only strings them together.
-pub fn analyse(prev: &Frame, cur: &Frame, algo: &str, threshold: &str, feature: &str) -> Result<Analysis, String> {
+pub fn analyse(
+    prev: &Frame,
+    cur: &Frame,
+    algo: StrategyKind,
+    threshold: &str,
+    feature: &str,
+) -> Result<Analysis, String> {
     let t0 = crate::worker::now_ms();
-    let t = parse_threshold(threshold)?;
-    let strategy = Strategy::parse(algo, t).map_err(|e| e.to_string())?;
+    let strategy = parse_strategy(algo, threshold)?;
     let feature = parse_feature(feature)?;
     let explanation = explain(&strategy, &prev.features, &cur.features, feature).map_err(|e| e.to_string())?;
     let tuple = explanation.info.to_string();
@@ -235,4 +269,28 @@ pub fn nearest_keypoint(kps: &[KeyPoint], x: f64, y: f64) -> Option<usize> {
         }
     }
     best.map(|(i, _)| i)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn each_strategy_has_its_own_threshold_slot_and_texts() {
+        let slots: Vec<usize> = StrategyKind::ALL.iter().map(|&k| slot(k)).collect();
+        assert_eq!(slots, [0, 1, 2]);
+        assert_eq!(StrategyKind::ALL.map(default_threshold), ["100", "", "0.8"]);
+        assert_eq!(threshold_hint(StrategyKind::Nn), "0 … 500, empty = none");
+        assert!(strategy_label(StrategyKind::Nndr).starts_with("nndr — "));
+    }
+
+    #[test]
+    fn the_command_line_and_the_strategy_from_the_boxes() {
+        assert_eq!(get_info_command(StrategyKind::Dt, " 300 ", "150", "209 "), "get_info -a dt -t 300 150 209");
+        assert_eq!(get_info_command(StrategyKind::Nn, "  ", "FRAME_ID", "3"), "get_info -a nn FRAME_ID 3");
+        assert_eq!(parse_strategy(StrategyKind::Nndr, "0.8"), Ok(Strategy::Nndr(0.8)));
+        assert_eq!(parse_strategy(StrategyKind::Nn, ""), Ok(Strategy::Nn(None)));
+        assert!(parse_strategy(StrategyKind::Dt, "").unwrap_err().contains("needs a threshold"));
+        assert!(parse_strategy(StrategyKind::Dt, "abc").unwrap_err().contains("not a number"));
+    }
 }

@@ -1,8 +1,16 @@
 //! The view's state in the URL query, so a teacher can link a prepared view:
 //! `?src=demo&frame=1&feature=7&algo=nndr&t=0.8&ex=42&q=3`.
 //!
+//! Two layers: [`UrlState::from_pairs`] / [`UrlState::to_pairs`] read and
+//! write decoded (key, value) pairs (plain Rust, tested natively), and
+//! [`UrlState::from_query`] / [`UrlState::to_query`] let the browser's
+//! `URLSearchParams` do the percent-encoding.
+//!
 //! Values are kept as the user typed them (the threshold text in particular):
 //! validation is the core's job (`Strategy::parse`), not the URL's.
+
+use siftlab_core::matching::strategy::StrategyKind;
+use wasm_bindgen::JsCast;
 
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct UrlState {
@@ -11,7 +19,7 @@ pub struct UrlState {
     /// The lab's FRAME_ID: frames FRAME_ID-1 and FRAME_ID are matched.
     pub frame: Option<u32>,
     pub feature: Option<usize>,
-    pub algo: Option<String>,
+    pub algo: Option<StrategyKind>,
     /// Threshold text; absent = none (only meaningful for nn).
     pub t: Option<String>,
     /// Exercise seed and question number.
@@ -21,56 +29,20 @@ pub struct UrlState {
     pub lanes: Option<u32>,
 }
 
-fn decode(s: &str) -> String {
-    let b = s.as_bytes();
-    let mut out = Vec::with_capacity(b.len());
-    let mut i = 0;
-    while i < b.len() {
-        match b[i] {
-            b'+' => out.push(b' '),
-            b'%' if i + 2 < b.len() => {
-                let hex = std::str::from_utf8(&b[i + 1..i + 3]).ok().and_then(|h| u8::from_str_radix(h, 16).ok());
-                match hex {
-                    Some(v) => {
-                        out.push(v);
-                        i += 2;
-                    }
-                    None => out.push(b'%'),
-                }
-            }
-            c => out.push(c),
-        }
-        i += 1;
-    }
-    String::from_utf8_lossy(&out).into_owned()
-}
-
-fn encode(s: &str) -> String {
-    let mut out = String::new();
-    for c in s.bytes() {
-        if c.is_ascii_alphanumeric() || b"-._~".contains(&c) {
-            out.push(c as char);
-        } else {
-            out.push_str(&format!("%{c:02X}"));
-        }
-    }
-    out
-}
-
 impl UrlState {
-    /// Parses a query string (with or without the leading `?`); unknown keys
-    /// and unparsable numbers are ignored (a broken link still opens the app).
-    pub fn from_query(q: &str) -> Self {
+    /// Reads decoded (key, value) pairs; unknown keys, unknown strategies and
+    /// unparsable numbers are ignored (a broken link still opens the app); a
+    /// repeated key: the last one counts.
+    pub fn from_pairs<K: AsRef<str>, V: AsRef<str>>(pairs: impl IntoIterator<Item = (K, V)>) -> Self {
         let mut st = UrlState::default();
-        for pair in q.trim_start_matches('?').split('&').filter(|p| !p.is_empty()) {
-            let (k, v) = pair.split_once('=').unwrap_or((pair, ""));
-            let v = decode(v);
-            match decode(k).as_str() {
-                "src" => st.src = Some(v),
+        for (k, v) in pairs {
+            let v = v.as_ref();
+            match k.as_ref() {
+                "src" => st.src = Some(v.to_string()),
                 "frame" => st.frame = v.parse().ok(),
                 "feature" => st.feature = v.parse().ok(),
-                "algo" => st.algo = Some(v),
-                "t" => st.t = Some(v),
+                "algo" => st.algo = StrategyKind::parse(v),
+                "t" => st.t = Some(v.to_string()),
                 "ex" => st.ex = v.parse().ok(),
                 "q" => st.q = v.parse().ok(),
                 "lanes" => st.lanes = v.parse().ok(),
@@ -80,38 +52,48 @@ impl UrlState {
         st
     }
 
-    /// The query string, `?`-prefixed, keys in a fixed order.
+    /// The decoded (key, value) pairs of the set fields, keys in a fixed order.
+    pub fn to_pairs(&self) -> Vec<(&'static str, String)> {
+        let num = |k: &'static str, v: Option<u64>| v.map(|v| (k, v.to_string()));
+        [
+            self.src.clone().map(|v| ("src", v)),
+            num("frame", self.frame.map(u64::from)),
+            num("feature", self.feature.map(|f| f as u64)),
+            self.algo.map(|a| ("algo", a.name().to_string())),
+            self.t.clone().map(|v| ("t", v)),
+            num("ex", self.ex),
+            num("q", self.q.map(u64::from)),
+            num("lanes", self.lanes.map(u64::from)),
+        ]
+        .into_iter()
+        .flatten()
+        .collect()
+    }
+
+    /// Parses a query string (with or without the leading `?`), decoded by
+    /// the browser's `URLSearchParams` (browser only).
+    pub fn from_query(q: &str) -> Self {
+        let Ok(params) = web_sys::UrlSearchParams::new_with_str(q) else { return UrlState::default() };
+        let entries = js_sys::try_iter(&params).ok().flatten();
+        let pairs = entries.into_iter().flatten().filter_map(|entry| {
+            let pair = entry.ok()?.dyn_into::<js_sys::Array>().ok()?;
+            Some((pair.get(0).as_string()?, pair.get(1).as_string()?))
+        });
+        UrlState::from_pairs(pairs)
+    }
+
+    /// The query string, `?`-prefixed (empty when nothing is set), encoded by
+    /// the browser's `URLSearchParams` (browser only).
     pub fn to_query(&self) -> String {
-        let mut parts = Vec::new();
-        let mut push = |k: &str, v: String| parts.push(format!("{k}={}", encode(&v)));
-        if let Some(v) = &self.src {
-            push("src", v.clone());
+        let Ok(params) = web_sys::UrlSearchParams::new() else { return String::new() };
+        for (k, v) in self.to_pairs() {
+            params.append(k, &v);
         }
-        if let Some(v) = self.frame {
-            push("frame", v.to_string());
-        }
-        if let Some(v) = self.feature {
-            push("feature", v.to_string());
-        }
-        if let Some(v) = &self.algo {
-            push("algo", v.clone());
-        }
-        if let Some(v) = &self.t {
-            push("t", v.clone());
-        }
-        if let Some(v) = self.ex {
-            push("ex", v.to_string());
-        }
-        if let Some(v) = self.q {
-            push("q", v.to_string());
-        }
-        if let Some(v) = self.lanes {
-            push("lanes", v.to_string());
-        }
-        if parts.is_empty() {
-            String::new()
+        let q: String = params.to_string().into();
+        if q.is_empty() {
+            q
         } else {
-            format!("?{}", parts.join("&"))
+            format!("?{q}")
         }
     }
 }
@@ -126,25 +108,31 @@ mod tests {
             src: Some("demo".into()),
             frame: Some(1),
             feature: Some(7),
-            algo: Some("nndr".into()),
+            algo: Some(StrategyKind::Nndr),
             t: Some("0.8".into()),
             ex: Some(42),
             q: Some(3),
             lanes: Some(16),
         };
-        let q = st.to_query();
-        assert_eq!(q, "?src=demo&frame=1&feature=7&algo=nndr&t=0.8&ex=42&q=3&lanes=16");
-        assert_eq!(UrlState::from_query(&q), st);
+        let pairs = st.to_pairs();
+        let keys: Vec<&str> = pairs.iter().map(|(k, _)| *k).collect();
+        assert_eq!(keys, ["src", "frame", "feature", "algo", "t", "ex", "q", "lanes"]);
+        let values: Vec<&str> = pairs.iter().map(|(_, v)| v.as_str()).collect();
+        assert_eq!(values, ["demo", "1", "7", "nndr", "0.8", "42", "3", "16"]);
+        assert_eq!(UrlState::from_pairs(pairs), st);
     }
 
     #[test]
     fn tolerates_broken_links() {
-        let st = UrlState::from_query("?feature=abc&algo=dt&t=1%2E5&junk&frame=-3");
+        let st =
+            UrlState::from_pairs([("feature", "abc"), ("algo", "dt"), ("t", "1.5"), ("junk", ""), ("frame", "-3")]);
         assert_eq!(st.feature, None);
         assert_eq!(st.frame, None);
-        assert_eq!(st.algo.as_deref(), Some("dt"));
+        assert_eq!(st.algo, Some(StrategyKind::Dt));
         assert_eq!(st.t.as_deref(), Some("1.5"));
-        assert_eq!(UrlState::from_query(""), UrlState::default());
-        assert_eq!(UrlState::default().to_query(), "");
+        assert_eq!(UrlState::from_pairs([("algo", "knn")]).algo, None);
+        assert_eq!(UrlState::from_pairs([("frame", "3"), ("frame", "4")]).frame, Some(4));
+        assert_eq!(UrlState::from_pairs(Vec::<(&str, &str)>::new()), UrlState::default());
+        assert!(UrlState::default().to_pairs().is_empty());
     }
 }

@@ -51,11 +51,6 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
                 },
             });
         }
-        ToWorker::Vo { id, frames, poses } => {
-            if let Err(message) = odometry(id, &frames, &poses, post) {
-                post(FromWorker::Failed { id, message });
-            }
-        }
         ToWorker::Detect { frame, bytes } => match GrayImage::decode(&bytes) {
             Ok(img) => {
                 let points = sift_detector(SiftParams::for_host())(&img);
@@ -123,7 +118,13 @@ impl VoSession {
     /// trajectory error and the lab's window as PNG. `points`: the frame's
     /// keypoints if detected elsewhere (else detected here when the loop
     /// re-detects).
-    fn frame(&mut self, i: usize, bytes: &[u8], points: Option<Vec<[f32; 2]>>, post: &dyn Fn(FromWorker)) -> Result<(), String> {
+    fn frame(
+        &mut self,
+        i: usize,
+        bytes: &[u8],
+        points: Option<Vec<[f32; 2]>>,
+        post: &dyn Fn(FromWorker),
+    ) -> Result<(), String> {
         use siftlab_core::dataset::position;
         use siftlab_core::render::{encode_png, trajectory};
         use siftlab_core::vo::metrics::ate_rmse;
@@ -154,19 +155,6 @@ impl VoSession {
         }
         Ok(())
     }
-}
-
-/// The lab's `view_trajectory` loop in this worker alone, one message per
-/// frame so the page can draw the trajectory as it grows.
-fn odometry(id: u32, frames: &[Vec<u8>], poses: &str, post: &dyn Fn(FromWorker)) -> Result<(), String> {
-    if frames.is_empty() {
-        return Err("no frames to run the odometry on: give at least 2".into());
-    }
-    let mut session = VoSession::start(id, frames.len(), poses)?;
-    for (i, bytes) in frames.iter().enumerate() {
-        session.frame(i, bytes, None, post)?;
-    }
-    Ok(())
 }
 
 /// Entry point of the worker script: listen for requests, then say we are ready

@@ -15,6 +15,7 @@ use siftlab_app::components::{apply_url, url_state, Explorer, DEMO_FEATURE};
 use siftlab_app::msg::{FromWorker, SiftResult, ToWorker};
 use siftlab_app::state::{analyse, nearest_keypoint, Lab, Source};
 use siftlab_app::urlstate::UrlState;
+use siftlab_core::matching::strategy::StrategyKind;
 use siftlab_core::sift::{Features, KeyPoint};
 use std::sync::Arc;
 use wasm_bindgen::JsCast;
@@ -73,14 +74,16 @@ fn frame(i: usize) -> Arc<FrameData> {
     let (w, h, features) = golden(i);
     Arc::new(FrameData {
         label: format!("gray/00/image_0/{i:06}.png"),
-        width: w,
-        height: h,
-        // The frame view only needs some pixels; a gradient is enough here.
-        gray: (0..w * h).map(|p| (p % 251) as u8).collect(),
-        features,
-        decode_ms: 0.0,
-        sift_ms: 0.0,
-        engine: String::new(),
+        sift: SiftResult {
+            width: w,
+            height: h,
+            // The frame view only needs some pixels; a gradient is enough here.
+            gray: (0..w * h).map(|p| (p % 251) as u8).collect(),
+            features,
+            decode_ms: 0.0,
+            sift_ms: 0.0,
+            engine: String::new(),
+        },
         bytes: Arc::new(Vec::new()),
         lanes: 8,
     })
@@ -333,10 +336,31 @@ async fn self_check_grades_the_golden_answer_and_names_a_mistake() {
     assert!(r.contains("Not the lab's answer") && r.contains("int()"), "{r}");
 }
 
+/// The query strings themselves, encoded and decoded by the browser's URLSearchParams.
+#[wasm_bindgen_test]
+fn url_queries_round_trip_and_broken_links_open() {
+    let q = "?src=demo&frame=1&feature=7&algo=nndr&t=0.8&ex=42&q=3&lanes=16";
+    let st = UrlState::from_query(q);
+    assert_eq!(st.to_query(), q);
+    assert_eq!(st.to_pairs().len(), 8, "{st:?}");
+    assert_eq!((st.algo, st.t.as_deref(), st.lanes), (Some(StrategyKind::Nndr), Some("0.8"), Some(16)));
+    assert_eq!(UrlState::from_query(&q[1..]), st, "the leading ? is optional");
+    let st = UrlState::from_query("?feature=abc&algo=dt&t=1%2E5&junk&frame=-3");
+    assert_eq!(st.feature, None);
+    assert_eq!(st.frame, None);
+    assert_eq!(st.algo, Some(StrategyKind::Dt));
+    assert_eq!(st.t.as_deref(), Some("1.5"));
+    assert_eq!(UrlState::from_query(""), UrlState::default());
+    assert_eq!(UrlState::default().to_query(), "");
+    // Text the user typed survives the trip.
+    let typed = UrlState { t: Some(" 1e2 & =?%".into()), ..UrlState::default() };
+    assert_eq!(UrlState::from_query(&typed.to_query()), typed);
+}
+
 #[wasm_bindgen_test]
 async fn url_state_round_trips_through_a_fresh_lab() {
     let lab = loaded_lab(3);
-    lab.algo.set("dt".into());
+    lab.algo.set(StrategyKind::Dt);
     lab.set_threshold("212.5".into());
     lab.set_feature(42);
     lab.lanes.set(16);
@@ -347,7 +371,7 @@ async fn url_state_round_trips_through_a_fresh_lab() {
     let mut folder = UrlState::from_query(&st.to_query());
     folder.src = Some("folder".into());
     apply_url(fresh, &folder);
-    assert_eq!(fresh.algo.get_untracked(), "dt");
+    assert_eq!(fresh.algo.get_untracked(), StrategyKind::Dt);
     assert_eq!(fresh.threshold(), "212.5");
     assert_eq!(fresh.feature(), Some(42));
     assert_eq!(fresh.lanes.get_untracked(), 16);
@@ -383,7 +407,7 @@ fn worker_messages_round_trip_bit_for_bit() {
 
 #[wasm_bindgen_test]
 fn odometry_messages_round_trip_and_bad_poses_are_named() {
-    let v = ToWorker::Vo { id: 5, frames: vec![vec![1, 2], vec![3]], poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
+    let v = ToWorker::VoStart { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
     assert_eq!(ToWorker::from_js(&v.to_js()).unwrap(), v);
     for m in [
         FromWorker::VoStep {
@@ -408,11 +432,7 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
     ] {
         assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
     }
-    let run = |frames: Vec<Vec<u8>>, poses: &str| {
-        let got = std::cell::RefCell::new(Vec::new());
-        siftlab_app::worker::handle(ToWorker::Vo { id: 1, frames, poses: poses.into() }, &|m| got.borrow_mut().push(m));
-        got.into_inner()
-    };
+    let run = |frames: Vec<Vec<u8>>, poses: &str| one_worker_odometry(1, frames, poses);
     // Malformed poses and too few poses fail before any SIFT runs, with the file named.
     let got = run(vec![vec![0; 4]; 2], "1 0 0 0\n");
     let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
@@ -424,6 +444,25 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
     let got = run(vec![b"nope".to_vec(); 2], "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n");
     let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.starts_with("frame 0: not an image"), "{message}");
+}
+
+/// The lab's odometry loop in one worker: `VoStart`, then every frame with no
+/// keypoints given (the worker detects where the loop re-detects), until the
+/// first failure.
+fn one_worker_odometry(id: u32, frames: Vec<Vec<u8>>, poses: &str) -> Vec<FromWorker> {
+    let got = std::cell::RefCell::new(Vec::new());
+    let post = |m: FromWorker| got.borrow_mut().push(m);
+    let failed =
+        |got: &std::cell::RefCell<Vec<FromWorker>>| matches!(got.borrow().last(), Some(FromWorker::Failed { .. }));
+    let total = frames.len() as u32;
+    siftlab_app::worker::handle(ToWorker::VoStart { id, total, poses: poses.into() }, &post);
+    for (i, bytes) in frames.into_iter().enumerate() {
+        if failed(&got) {
+            break;
+        }
+        siftlab_app::worker::handle(ToWorker::VoFrame { id, frame: i as u32, bytes, points: None }, &post);
+    }
+    got.into_inner()
 }
 
 /// The app's odometry as `run_vo` drives it (a tracking worker fed one frame at a
@@ -451,10 +490,8 @@ fn streamed_odometry_equals_the_one_worker_loop() {
         FromWorker::VoDone { id, ate, png, .. } => FromWorker::VoDone { id, ate, png, ms: 0.0 },
         m => m,
     };
-    let one_worker: Vec<FromWorker> = handle(ToWorker::Vo { id: 7, frames: frames.clone(), poses: poses.into() })
-        .into_iter()
-        .map(without_time)
-        .collect();
+    let one_worker: Vec<FromWorker> =
+        one_worker_odometry(7, frames.clone(), poses).into_iter().map(without_time).collect();
     assert_eq!(one_worker.len(), 5, "{one_worker:?}");
     assert!(matches!(one_worker[4], FromWorker::VoDone { .. }));
 
@@ -502,7 +539,7 @@ fn the_demo_feature_is_large_central_and_matched() {
     assert!(k.size > 30.0, "size {}", k.size);
     assert!((k.x as f64 - w as f64 / 2.0).abs() < w as f64 / 10.0, "x {}", k.x);
     assert!((k.y as f64 - h as f64 / 2.0).abs() < h as f64 / 4.0, "y {}", k.y);
-    let a = analyse(&frame(0), &frame(1), "nndr", "0.8", &DEMO_FEATURE.to_string()).unwrap();
+    let a = analyse(&frame(0), &frame(1), StrategyKind::Nndr, "0.8", &DEMO_FEATURE.to_string()).unwrap();
     assert_eq!(a.explanation.matches.len(), 1, "{}", a.tuple);
     // What OpenCV's lab code prints for it (the golden draw of the same settings, if drawn).
     if let Some(d) = draws()

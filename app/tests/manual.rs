@@ -55,7 +55,8 @@ async fn the_manual_examples_through_the_app() {
     for ex in &EXAMPLES {
         let f = ex.frame as u32;
         let t = siftlab_app::lab_manual::threshold_text(ex);
-        let a = analyse(&frames[&(f - 1)], &frames[&f], ex.algo, &t, &ex.feature.to_string()).unwrap();
+        let kind = siftlab_app::lab_manual::example_kind(ex).unwrap();
+        let a = analyse(&frames[&(f - 1)], &frames[&f], kind, &t, &ex.feature.to_string()).unwrap();
         assert_eq!(a.tuple, ex.expected, "{}", ex.command());
     }
 

@@ -3,7 +3,7 @@
 use crate::exercise::{question, Question};
 use crate::loading;
 use crate::selfcheck::{diagnose, Diagnosis};
-use crate::state::{parse_threshold, Lab};
+use crate::state::{parse_strategy, Lab};
 use leptos::prelude::*;
 use siftlab_core::matching::{explain, mistaken_answers, Strategy};
 
@@ -36,6 +36,38 @@ fn DiagnosisView(d: Diagnosis) -> impl IntoView {
             <ul class="fields">{fields}</ul>
             {likely}
         </div>
+    }
+}
+
+/// The box a student pastes a `ret value` into.
+#[component]
+fn AnswerBox(
+    answer: RwSignal<String>,
+    rows: &'static str,
+    testid: &'static str,
+    label: &'static str,
+    #[prop(optional)] placeholder: Option<&'static str>,
+) -> impl IntoView {
+    view! {
+        <textarea
+            rows=rows
+            data-testid=testid
+            aria-label=label
+            placeholder=placeholder
+            prop:value=move || answer.get()
+            on:input=move |ev| answer.set(event_target_value(&ev))
+        ></textarea>
+    }
+}
+
+/// The last check's outcome: the diagnosis, or why there is none.
+#[component]
+fn Outcome(result: RwSignal<Option<Result<Diagnosis, String>>>) -> impl IntoView {
+    move || {
+        result.get().map(|r| match r {
+            Ok(d) => view! { <DiagnosisView d=d/> }.into_any(),
+            Err(e) => view! { <p class="error-inline">{e}</p> }.into_any(),
+        })
     }
 }
 
@@ -77,20 +109,16 @@ pub fn SelfCheck() -> impl IntoView {
                 ev.prevent_default();
                 check();
             }>
-                <textarea
+                <AnswerBox
+                    answer=answer
                     rows="3"
-                    data-testid="answer"
-                    aria-label="your ret value"
+                    testid="answer"
+                    label="your ret value"
                     placeholder="((523, 181), [(517, 183)], [61.400001525878906])"
-                    prop:value=move || answer.get()
-                    on:input=move |ev| answer.set(event_target_value(&ev))
-                ></textarea>
+                />
                 <button type="submit" class="primary" data-testid="check">"Check my answer"</button>
             </form>
-            {move || result.get().map(|r| match r {
-                Ok(d) => view! { <DiagnosisView d=d/> }.into_any(),
-                Err(e) => view! { <p class="error-inline">{e}</p> }.into_any(),
-            })}
+            <Outcome result=result/>
         </section>
     }
 }
@@ -133,8 +161,7 @@ pub fn Exercises() -> impl IntoView {
     };
     let submit = move || {
         let Some(q) = current() else { return };
-        let r = parse_threshold(&q.threshold)
-            .and_then(|t| Strategy::parse(q.algo, t).map_err(|e| e.to_string()))
+        let r = parse_strategy(q.algo, &q.threshold)
             .and_then(|s| grade(lab, &s, q.feature(count()), &answer.get_untracked()));
         if let Ok(d) = &r {
             let qn = lab.ex_q.get_untracked();
@@ -171,19 +198,13 @@ pub fn Exercises() -> impl IntoView {
                         Some(q) => view! {
                             <p class="question" data-testid="question">
                                 "What does your code print as "<code>"ret value:"</code>" for "
-                                <code>{move || if ready() { q.command(count()) } else { format!("get_info -a {} … (loading frames {})", q.algo, q.frame_id) }}</code>"?"
+                                <code>{move || if ready() { q.command(count()) } else { format!("get_info -a {} … (loading frames {})", q.algo.name(), q.frame_id) }}</code>"?"
                             </p>
                             <form on:submit=move |ev| {
                                 ev.prevent_default();
                                 submit();
                             }>
-                                <textarea
-                                    rows="2"
-                                    data-testid="exercise-answer"
-                                    aria-label="your answer"
-                                    prop:value=move || answer.get()
-                                    on:input=move |ev| answer.set(event_target_value(&ev))
-                                ></textarea>
+                                <AnswerBox answer=answer rows="2" testid="exercise-answer" label="your answer"/>
                                 <div class="row">
                                     <button type="submit" class="primary" prop:disabled=move || !ready()>"Submit"</button>
                                     <button type="button" on:click=next data-testid="exercise-next">"Next question"</button>
@@ -191,10 +212,7 @@ pub fn Exercises() -> impl IntoView {
                             </form>
                         }.into_any(),
                     }}
-                    {move || result.get().map(|r| match r {
-                        Ok(d) => view! { <DiagnosisView d=d/> }.into_any(),
-                        Err(e) => view! { <p class="error-inline">{e}</p> }.into_any(),
-                    })}
+                    <Outcome result=result/>
                 }.into_any(),
             }}
         </section>

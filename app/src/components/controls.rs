@@ -1,25 +1,22 @@
 //! Strategy, threshold (slider + box), feature id, keypoint toggle.
 
-use crate::state::{parse_threshold, Lab, Which};
+use crate::state::{get_info_command, parse_threshold, strategy_label, threshold_hint, Lab, Source, Which};
 use leptos::prelude::*;
+use siftlab_core::matching::strategy::StrategyKind;
 
 #[component]
 pub fn Controls() -> impl IntoView {
     let lab = expect_context::<Lab>();
-    let is_nndr = move || lab.algo.get() == "nndr";
+    let is_nndr = move || lab.algo.get() == StrategyKind::Nndr;
     let range_max = move || if is_nndr() { "1" } else { "500" };
     let range_step = move || if is_nndr() { "0.01" } else { "1" };
-    let slider_value = move || {
-        parse_threshold(&lab.threshold()).ok().flatten().map(|t| t.to_string()).unwrap_or_else(|| "0".into())
-    };
+    let slider_value =
+        move || parse_threshold(&lab.threshold()).ok().flatten().map(|t| t.to_string()).unwrap_or_else(|| "0".into());
     let count = move || lab.frame(Which::Prev).with(|f| f.as_ref().map(|f| f.features.keypoints.len()));
     let step_feature = move |delta: i64| {
-        let n = count().unwrap_or(0) as i64;
-        if n == 0 {
-            return;
+        if let Some(f) = crate::plot::step_feature(lab.feature().unwrap_or(0), delta, count().unwrap_or(0)) {
+            lab.set_feature(f);
         }
-        let f = lab.feature().map(|f| f as i64).unwrap_or(0);
-        lab.set_feature((f + delta).clamp(0, n - 1) as usize);
     };
     let link_copied = RwSignal::new(false);
     let copy_link = move |_| {
@@ -42,23 +39,21 @@ pub fn Controls() -> impl IntoView {
                     <span>"Strategy (-a)"</span>
                     <select
                         data-testid="algo"
-                        prop:value=move || lab.algo.get()
-                        on:change=move |ev| lab.algo.set(event_target_value(&ev))
+                        prop:value=move || lab.algo.get().name()
+                        on:change=move |ev| {
+                            if let Some(k) = StrategyKind::parse(&event_target_value(&ev)) {
+                                lab.algo.set(k);
+                            }
+                        }
                     >
-                        <option value="dt">"dt — distance threshold"</option>
-                        <option value="nn">"nn — nearest neighbour"</option>
-                        <option value="nndr">"nndr — nearest-neighbour distance ratio"</option>
+                        {StrategyKind::ALL.map(|k| view! { <option value=k.name()>{strategy_label(k)}</option> })}
                     </select>
                 </label>
                 <label class="ctl">
                     <span>
                         "Threshold (-t) "
                         <span class="muted">
-                            {move || match lab.algo.get().as_str() {
-                                "nndr" => "0 … 1",
-                                "nn" => "0 … 500, empty = none",
-                                _ => "0 … 500",
-                            }}
+                            {move || threshold_hint(lab.algo.get())}
                         </span>
                     </span>
                     <div class="threshold">
@@ -69,7 +64,7 @@ pub fn Controls() -> impl IntoView {
                             max=range_max
                             step=range_step
                             prop:value=slider_value
-                            prop:disabled=move || lab.threshold().trim().is_empty() && lab.algo.get() == "nn"
+                            prop:disabled=move || lab.threshold().trim().is_empty() && lab.algo.get() == StrategyKind::Nn
                             on:input=move |ev| lab.set_threshold(event_target_value(&ev))
                         />
                         <input
@@ -116,18 +111,13 @@ pub fn Controls() -> impl IntoView {
                 "Same as: "
                 <code data-testid="cli-equivalent">
                     {move || {
-                        let t = lab.threshold();
-                        let t = t.trim();
                         let frame = match lab.source.get() {
-                            crate::state::Source::Files => "FRAME_ID".to_string(),
+                            Source::Files => "FRAME_ID".to_string(),
                             _ => lab.frame_id.get().to_string(),
                         };
-                        format!(
-                            "siftlab get_info -a {}{} {frame} {}",
-                            lab.algo.get(),
-                            if t.is_empty() { String::new() } else { format!(" -t {t}") },
-                            lab.feature_text.get().trim()
-                        )
+                        let args =
+                            get_info_command(lab.algo.get(), &lab.threshold(), &frame, &lab.feature_text.get());
+                        format!("siftlab {args}")
                     }}
                 </code>
                 " · "

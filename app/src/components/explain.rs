@@ -3,10 +3,11 @@
 //! `Explanation`; the only arithmetic here is for drawing.
 
 use crate::loading;
+use crate::plot::{bar_y, chart_ymax, curve_points, curve_y, descriptor_cells, descriptor_rows, threshold_line};
 use crate::state::{Analysis, Lab, Which};
 use leptos::prelude::*;
 use siftlab_core::matching::info::py_int;
-use siftlab_core::matching::{Strategy, Verdict};
+use siftlab_core::matching::Verdict;
 use siftlab_core::pyfmt::{py_f32, py_float};
 use siftlab_core::sift::SiftParams;
 use std::collections::HashSet;
@@ -16,41 +17,37 @@ use std::collections::HashSet;
 /// Each bin is drawn as a ray at bin·45° (counter-clockwise, in the keypoint's
 /// rotated frame), its length proportional to the value.
 #[component]
-pub fn DescriptorGrid(desc: [u8; 128], #[prop(into)] title: String, #[prop(optional)] testid: &'static str) -> impl IntoView {
+pub fn DescriptorGrid(
+    desc: [u8; 128],
+    #[prop(into)] title: String,
+    #[prop(optional)] testid: &'static str,
+) -> impl IntoView {
     const CELL: f64 = 44.0;
-    let max = desc.iter().copied().max().unwrap_or(0).max(1) as f64;
-    let cells = (0..16)
-        .map(|c| {
-            let (row, col) = (c / 4, c % 4);
-            let (x0, y0) = (col as f64 * CELL, row as f64 * CELL);
-            let (cx, cy) = (x0 + CELL / 2.0, y0 + CELL / 2.0);
-            let sum: f64 = desc[c * 8..c * 8 + 8].iter().map(|&v| v as f64).sum();
-            let shade = (sum / (max * 8.0) * 0.9).min(0.9);
-            let rays = (0..8)
-                .map(|b| {
-                    let v = desc[c * 8 + b] as f64;
-                    let len = v / max * (CELL / 2.0 - 3.0);
-                    let a = b as f64 * std::f64::consts::FRAC_PI_4;
+    let cells = descriptor_cells(&desc, CELL)
+        .into_iter()
+        .enumerate()
+        .map(|(c, cell)| {
+            let (cx, cy) = (cell.x0 + CELL / 2.0, cell.y0 + CELL / 2.0);
+            let (row, col) = (cell.row, cell.col);
+            let rays = cell
+                .rays
+                .iter()
+                .enumerate()
+                .map(|(b, &(x2, y2))| {
                     view! {
-                        <line x1=cx y1=cy x2=cx + len * a.cos() y2=cy - len * a.sin() class="ray">
+                        <line x1=cx y1=cy x2=x2 y2=y2 class="ray">
                             <title>{format!("cell ({row}, {col}), bin {b} ({}°): {}", b * 45, desc[c * 8 + b])}</title>
                         </line>
                     }
                 })
                 .collect_view();
             view! {
-                <rect x=x0 y=y0 width=CELL height=CELL class="cell" fill-opacity=shade/>
+                <rect x=cell.x0 y=cell.y0 width=CELL height=CELL class="cell" fill-opacity=cell.shade/>
                 {rays}
             }
         })
         .collect_view();
-    let rows = (0..16)
-        .map(|r| {
-            let vals: Vec<String> = desc[r * 8..r * 8 + 8].iter().map(|v| format!("{v:>3}")).collect();
-            format!("cell ({}, {}): {}", r / 4, r % 4, vals.join(" "))
-        })
-        .collect::<Vec<_>>()
-        .join("\n");
+    let rows = descriptor_rows(&desc);
     view! {
         <figure class="descriptor" data-testid=testid>
             <svg viewBox=format!("0 0 {} {}", CELL * 4.0, CELL * 4.0) class="desc-svg" role="img" aria-label=title.clone()>
@@ -81,16 +78,10 @@ pub fn DistanceChart(analysis: Analysis) -> impl IntoView {
     let kept: HashSet<usize> = e.matches.iter().map(|m| m.train_idx).collect();
     let shown = ranked.len().min(SHOWN);
     // What the rule compares d against, as a distance.
-    let (line, line_label) = match e.verdict {
-        Verdict::Dt { t, .. } => (Some(t), format!("t = {}", py_float(t))),
-        Verdict::Nn { t: Some(t), .. } => (Some(t), format!("t = {}", py_float(t))),
-        Verdict::Nn { t: None, .. } => (None, String::new()),
-        Verdict::Nndr { t, d2, .. } => (Some(t * d2 as f64), format!("t·d2 = {}", py_float(t * d2 as f64))),
-    };
-    let top = ranked[shown - 1].distance as f64;
-    let ymax = (top.max(line.unwrap_or(0.0).min(top * 1.6)) * 1.08).max(1.0);
+    let (line, line_label) = threshold_line(&e.verdict);
+    let ymax = chart_ymax(ranked[shown - 1].distance as f64, line);
     let bw = W / shown as f64;
-    let y = move |d: f64| H - (d / ymax).min(1.0) * H;
+    let y = move |d: f64| bar_y(d, ymax, H);
     let bars = ranked[..shown]
         .iter()
         .enumerate()
@@ -116,14 +107,10 @@ pub fn DistanceChart(analysis: Analysis) -> impl IntoView {
     // The whole sorted curve, small.
     let n = ranked.len();
     let dmax = ranked[n - 1].distance.max(1.0) as f64;
-    let pts: String = ranked
-        .iter()
-        .enumerate()
-        .step_by((n / 400).max(1))
-        .map(|(i, m)| format!("{:.1},{:.1} ", i as f64 / (n.max(2) - 1) as f64 * W, 50.0 - m.distance as f64 / dmax * 46.0))
-        .collect();
+    let distances: Vec<f32> = ranked.iter().map(|m| m.distance).collect();
+    let pts = curve_points(&distances, W);
     let full_thr = line.filter(|&l| l <= dmax).map(|l| {
-        let yy = 50.0 - l / dmax * 46.0;
+        let yy = curve_y(l, dmax);
         view! { <line x1="0" x2=W y1=yy y2=yy class="thr"/> }
     });
     view! {
@@ -186,7 +173,11 @@ fn rule_text(a: &Analysis) -> AnyView {
     .into_any()
 }
 
-fn info_text(a: &Analysis, prev_kps: &[siftlab_core::sift::KeyPoint], cur_kps: &[siftlab_core::sift::KeyPoint]) -> AnyView {
+fn info_text(
+    a: &Analysis,
+    prev_kps: &[siftlab_core::sift::KeyPoint],
+    cur_kps: &[siftlab_core::sift::KeyPoint],
+) -> AnyView {
     let e = &a.explanation;
     if e.matches.is_empty() {
         return view! {
@@ -210,7 +201,8 @@ fn info_text(a: &Analysis, prev_kps: &[siftlab_core::sift::KeyPoint], cur_kps: &
             }
         })
         .collect_view();
-    let more = (e.matches.len() > 5).then(|| view! { <li class="muted">{format!("… {} more", e.matches.len() - 5)}</li> });
+    let more =
+        (e.matches.len() > 5).then(|| view! { <li class="muted">{format!("… {} more", e.matches.len() - 5)}</li> });
     view! {
         <p>"The query point is the previous-frame keypoint of the first match, truncated with "
            <code>"int()"</code>" (toward zero, not rounded): "
@@ -232,7 +224,9 @@ pub fn Explanation() -> impl IntoView {
     };
     let step1 = move || {
         let (p, c) = counts();
-        let fmt = |x: Option<(usize, f64)>| x.map(|(n, ms)| format!("{n} keypoints ({ms:.0} ms)")).unwrap_or_else(|| "not loaded".into());
+        let fmt = |x: Option<(usize, f64)>| {
+            x.map(|(n, ms)| format!("{n} keypoints ({ms:.0} ms)")).unwrap_or_else(|| "not loaded".into())
+        };
         view! {
             <p>
                 "Previous frame: " <strong>{fmt(p)}</strong> " · current frame: " <strong>{fmt(c)}</strong>
@@ -249,7 +243,11 @@ pub fn Explanation() -> impl IntoView {
         let cur = lab.cur.get()?;
         let q = a.explanation.query;
         let desc = *prev.features.descriptors.get(a.feature)?;
-        let nearest = a.explanation.ranked.first().and_then(|m| cur.features.descriptors.get(m.train_idx).map(|d| (m.train_idx, *d)));
+        let nearest = a
+            .explanation
+            .ranked
+            .first()
+            .and_then(|m| cur.features.descriptors.get(m.train_idx).map(|d| (m.train_idx, *d)));
         Some(view! {
             <p>
                 {format!("Feature {} of the previous frame: pt = ({}, {}) → int ({}, {}); size {}, angle {}°, response {}, octave {} (layer {}).",
@@ -282,12 +280,7 @@ pub fn Explanation() -> impl IntoView {
         Some(info_text(&a, &p.features.keypoints, &c.features.keypoints))
     };
     let strategy_name = move || {
-        lab.analysis.with(|a| match a.as_ref().and_then(|r| r.as_ref().ok()).map(|a| a.strategy) {
-            Some(Strategy::Dt(_)) => "dt",
-            Some(Strategy::Nn(_)) => "nn",
-            Some(Strategy::Nndr(_)) => "nndr",
-            None => "the strategy",
-        })
+        lab.analysis.with(|a| a.as_ref().and_then(|r| r.as_ref().ok()).map_or("the strategy", |a| a.strategy.name()))
     };
     view! {
         <section class="card explain" aria-label="Step by step" data-testid="explanation">

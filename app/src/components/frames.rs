@@ -3,9 +3,9 @@
 //! green `view_info` circles at the `matching_info` coordinates.
 
 use crate::client::Frame;
+use crate::plot::{key_step, keypoint_path, orientation, step_feature, to_composite};
 use crate::state::{nearest_keypoint, Lab, Which};
 use leptos::prelude::*;
-use siftlab_core::sift::KeyPoint;
 use wasm_bindgen::{Clamped, JsCast};
 
 /// Colours of successive match lines (drawMatchesKnn picks random ones; these
@@ -37,7 +37,11 @@ impl Layout {
 
     /// Whether a composite point lies on the previous frame.
     pub fn on_prev(&self, x: f64, y: f64) -> bool {
-        if self.dy > 0.0 { y < self.dy } else { x < self.dx }
+        if self.dy > 0.0 {
+            y < self.dy
+        } else {
+            x < self.dx
+        }
     }
 }
 
@@ -45,11 +49,8 @@ fn draw(canvas: &web_sys::HtmlCanvasElement, prev: Option<&Frame>, cur: Option<&
     let (w, h) = (l.w, l.h);
     canvas.set_width(w as u32);
     canvas.set_height(h as u32);
-    let Some(ctx) = canvas
-        .get_context("2d")
-        .ok()
-        .flatten()
-        .and_then(|c| c.dyn_into::<web_sys::CanvasRenderingContext2d>().ok())
+    let Some(ctx) =
+        canvas.get_context("2d").ok().flatten().and_then(|c| c.dyn_into::<web_sys::CanvasRenderingContext2d>().ok())
     else {
         return;
     };
@@ -61,22 +62,12 @@ fn draw(canvas: &web_sys::HtmlCanvasElement, prev: Option<&Frame>, cur: Option<&
         for &g in &f.gray {
             rgba.extend_from_slice(&[g, g, g, 255]);
         }
-        if let Ok(img) = web_sys::ImageData::new_with_u8_clamped_array_and_sh(Clamped(&rgba), f.width as u32, f.height as u32) {
+        if let Ok(img) =
+            web_sys::ImageData::new_with_u8_clamped_array_and_sh(Clamped(&rgba), f.width as u32, f.height as u32)
+        {
             let _ = ctx.put_image_data(&img, x0, y0);
         }
     }
-}
-
-/// One SVG path drawing every keypoint as a circle of radius size/2 (one
-/// element instead of thousands keeps the toggle instant).
-fn keypoint_path(kps: &[KeyPoint], dx: f64, dy: f64) -> String {
-    let mut d = String::with_capacity(kps.len() * 40);
-    for k in kps {
-        let r = (k.size as f64 / 2.0).max(1.0);
-        let (x, y) = (k.x as f64 + dx, k.y as f64 + dy);
-        d.push_str(&format!("M{:.1} {:.1}a{r:.1} {r:.1} 0 1 0 {:.1} 0a{r:.1} {r:.1} 0 1 0 {:.1} 0", x - r, y, 2.0 * r, -2.0 * r));
-    }
-    d
 }
 
 #[component]
@@ -103,35 +94,22 @@ pub fn FramesView() -> impl IntoView {
     let select_at = move |ev: web_sys::MouseEvent| {
         let Some(el) = ev.current_target().and_then(|t| t.dyn_into::<web_sys::Element>().ok()) else { return };
         let r = el.get_bounding_client_rect();
-        if r.width() <= 0.0 || r.height() <= 0.0 {
-            return;
-        }
         let l = dims();
-        let x = (ev.client_x() as f64 - r.left()) * l.w as f64 / r.width();
-        let y = (ev.client_y() as f64 - r.top()) * l.h as f64 / r.height();
+        let (cx, cy) = (ev.client_x() as f64 - r.left(), ev.client_y() as f64 - r.top());
+        let Some((x, y)) = to_composite(cx, cy, r.width(), r.height(), l.w, l.h) else { return };
         if l.on_prev(x, y) {
-            if let Some(i) = lab.prev.with_untracked(|p| p.as_ref().and_then(|p| nearest_keypoint(&p.features.keypoints, x, y))) {
+            if let Some(i) =
+                lab.prev.with_untracked(|p| p.as_ref().and_then(|p| nearest_keypoint(&p.features.keypoints, x, y)))
+            {
                 lab.set_feature(i);
             }
         }
     };
     let on_key = move |ev: web_sys::KeyboardEvent| {
-        let n = kp_count(Which::Prev);
-        if n == 0 {
-            return;
-        }
-        let f = lab.feature().unwrap_or(0) as i64;
-        let next = match ev.key().as_str() {
-            "ArrowRight" | "ArrowDown" => f + 1,
-            "ArrowLeft" | "ArrowUp" => f - 1,
-            "PageDown" => f + 10,
-            "PageUp" => f - 10,
-            "Home" => 0,
-            "End" => n as i64 - 1,
-            _ => return,
-        };
+        let (n, f) = (kp_count(Which::Prev), lab.feature().unwrap_or(0));
+        let Some(next) = key_step(&ev.key(), f, n).and_then(|d| step_feature(f, d, n)) else { return };
         ev.prevent_default();
-        lab.set_feature(next.clamp(0, n as i64 - 1) as usize);
+        lab.set_feature(next);
     };
 
     let all_keypoints = move || {
@@ -139,8 +117,10 @@ pub fn FramesView() -> impl IntoView {
             return None;
         }
         let l = dims();
-        let p = lab.prev.with(|p| p.as_ref().map(|p| keypoint_path(&p.features.keypoints, 0.0, 0.0))).unwrap_or_default();
-        let c = lab.cur.with(|c| c.as_ref().map(|c| keypoint_path(&c.features.keypoints, l.dx, l.dy))).unwrap_or_default();
+        let p =
+            lab.prev.with(|p| p.as_ref().map(|p| keypoint_path(&p.features.keypoints, 0.0, 0.0))).unwrap_or_default();
+        let c =
+            lab.cur.with(|c| c.as_ref().map(|c| keypoint_path(&c.features.keypoints, l.dx, l.dy))).unwrap_or_default();
         Some(view! {
             <path d=p class="kp-all"/>
             <path d=c class="kp-all"/>
@@ -153,10 +133,7 @@ pub fn FramesView() -> impl IntoView {
         let p = lab.prev.get()?;
         let c = lab.cur.get()?;
         let q = *p.features.keypoints.get(a.feature)?;
-        let r = (q.size as f64 / 2.0).max(2.0);
-        // drawKeypoints' rich flag: the orientation line from the centre at `angle` degrees (image y points down).
-        let ang = (q.angle as f64).to_radians();
-        let (ox, oy) = (q.x as f64 + r * ang.cos(), q.y as f64 + r * ang.sin());
+        let (r, (ox, oy)) = orientation(&q);
         let info = &a.explanation.info;
         let has_matches = !a.explanation.matches.is_empty();
         let lines = a

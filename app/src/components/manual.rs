@@ -3,7 +3,7 @@
 //! manual's printed value beside siftlab's, with a mark.
 
 use crate::frameset::has_pair;
-use crate::lab_manual::{example_for, threshold_text, verdict};
+use crate::lab_manual::{example_for, example_kind, threshold_text, verdict};
 use crate::loading::{self, frame_path};
 use crate::state::{Lab, Source, Which};
 use leptos::prelude::*;
@@ -15,7 +15,7 @@ pub fn current_example(lab: Lab) -> Option<usize> {
     if matches!(lab.source.get(), Source::Files) {
         return None;
     }
-    example_for(lab.frame_id.get(), &lab.algo.get(), &lab.threshold(), &lab.feature_text.get())
+    example_for(lab.frame_id.get(), lab.algo.get(), &lab.threshold(), &lab.feature_text.get())
 }
 
 /// Puts example `i` in the explorer: its strategy, threshold and feature, and
@@ -23,7 +23,9 @@ pub fn current_example(lab: Lab) -> Option<usize> {
 /// the demo, which bundles every example's frames.
 pub fn apply_example(lab: Lab, i: usize) {
     let ex = &EXAMPLES[i];
-    lab.algo.set(ex.algo.to_string());
+    if let Some(k) = example_kind(ex) {
+        lab.algo.set(k);
+    }
     // After the strategy: the threshold box is per strategy.
     lab.set_threshold(threshold_text(ex));
     lab.set_feature(ex.feature);

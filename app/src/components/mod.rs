@@ -23,6 +23,7 @@ use crate::loading;
 use crate::state::{Lab, Source};
 use crate::urlstate::UrlState;
 use leptos::prelude::*;
+use siftlab_core::matching::strategy::StrategyKind;
 
 /// The whole explorer for a given state (tests mount this with their own `Lab`).
 #[component]
@@ -79,12 +80,12 @@ pub const DEMO_FEATURE: usize = 1256;
 
 /// Applies a link's state to a fresh `Lab` and starts loading what it names.
 pub fn apply_url(lab: Lab, st: &UrlState) {
-    if let Some(a) = st.algo.as_deref().filter(|a| matches!(*a, "dt" | "nn" | "nndr")) {
-        lab.algo.set(a.to_string());
+    if let Some(a) = st.algo {
+        lab.algo.set(a);
     }
     if let Some(t) = &st.t {
         lab.set_threshold(t.clone());
-    } else if st.algo.as_deref() == Some("nn") {
+    } else if st.algo == Some(StrategyKind::Nn) {
         lab.set_threshold(String::new());
     }
     if let Some(f) = st.feature {

@@ -8,6 +8,7 @@ use crate::client;
 use crate::frameset::{run_from_zero, vo_frame_count, vo_range_label};
 use crate::loading;
 use crate::msg::FromWorker;
+use crate::plot::{fit_xz, percent, polyline_xz, vo_done_text, vo_progress_text};
 use crate::state::Lab;
 use leptos::prelude::*;
 use siftlab_core::render::trajectory::coordinates_text;
@@ -116,29 +117,9 @@ pub fn TrajectoryView() -> impl IntoView {
             return None;
         }
         // The lab's window: x to the right, z (forward) downwards; fit all points.
-        let pts: Vec<P3> = s.iter().flat_map(|(_, e, t)| std::iter::once(*e).chain(*t)).collect();
-        let (mut x0, mut x1, mut z0, mut z1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-        for p in &pts {
-            if p[0].is_finite() && p[2].is_finite() {
-                x0 = x0.min(p[0]);
-                x1 = x1.max(p[0]);
-                z0 = z0.min(p[2]);
-                z1 = z1.max(p[2]);
-            }
-        }
-        let span = (x1 - x0).max(z1 - z0).max(1.0);
-        let pad = span * 0.08;
-        let (vx, vz, vs) = ((x0 + x1) / 2.0 - span / 2.0 - pad, (z0 + z1) / 2.0 - span / 2.0 - pad, span + 2.0 * pad);
-        let line = |f: &dyn Fn(&Step) -> Option<P3>| {
-            s.iter()
-                .filter_map(f)
-                .filter(|p| p[0].is_finite() && p[2].is_finite())
-                .map(|p| format!("{:.3},{:.3}", p[0], p[2]))
-                .collect::<Vec<_>>()
-                .join(" ")
-        };
-        let est = line(&|(_, e, _)| Some(*e));
-        let gt = line(&|(_, _, t)| *t);
+        let (vx, vz, vs) = fit_xz(s.iter().flat_map(|(_, e, t)| std::iter::once(*e).chain(*t)));
+        let est = polyline_xz(s.iter().map(|(_, e, _)| *e));
+        let gt = polyline_xz(s.iter().filter_map(|(_, _, t)| *t));
         let last = s.last().map(|(_, e, _)| *e).unwrap_or([0.0; 3]);
         let r = vs / 120.0;
         Some(view! {
@@ -182,18 +163,12 @@ pub fn TrajectoryView() -> impl IntoView {
             {move || error.get().map(|e| view! { <p class="error" data-testid="vo-error" role="alert">{e}</p> })}
             <Show when=move || running.get() || !steps.with(|s| s.is_empty())>
                 <div class="vo-progress" data-testid="vo-progress">
-                    <div class="pbar"><div class="pbar-fill" style:width=move || format!("{:.1}%", 100.0 * steps.with(|s| s.len()) as f64 / total.get().max(1) as f64)></div></div>
+                    <div class="pbar"><div class="pbar-fill" style:width=move || percent(steps.with(|s| s.len()), total.get())></div></div>
                     <span class="muted">{move || {
-                        let n = steps.with(|s| s.len());
                         // The rate so far, updated with each step while the run lasts
                         // (then the run's own figure, with the error, replaces it).
                         let elapsed = crate::worker::now_ms() - started_ms.get_value();
-                        let rate = if running.get() && n >= 2 && elapsed > 0.0 {
-                            format!(" · {:.1} frames/s", n as f64 * 1000.0 / elapsed)
-                        } else {
-                            String::new()
-                        };
-                        format!("frame {n} / {}{rate}", total.get())
+                        vo_progress_text(steps.with(|s| s.len()), total.get(), running.get(), elapsed)
                     }}</span>
                 </div>
                 <div class="vo-views">
@@ -207,11 +182,7 @@ pub fn TrajectoryView() -> impl IntoView {
                 <p>
                     "Trajectory error (RMSE, no alignment, GT scale): "
                     <strong data-testid="vo-ate">{format!("{:.4} m", d.ate)}</strong>
-                    {
-                        let n = steps.with(|s| s.len());
-                        let fps = if d.ms > 0.0 { format!(" ({:.1} frames/s)", n as f64 * 1000.0 / d.ms) } else { String::new() };
-                        format!(" over {n} frames · {:.1} s{fps}", d.ms / 1000.0)
-                    }
+                    {vo_done_text(steps.with(|s| s.len()), d.ms)}
                     {d.png_url.map(|u| view! { " · " <a href=u download="trajectory.png" data-testid="vo-download">"download trajectory.png"</a> })}
                 </p>
             })}
