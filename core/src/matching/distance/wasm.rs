@@ -1,5 +1,5 @@
 //! The simd128 distance kernel on the exact integer sums of `super`: the
-//! same distances bit for bit.
+//! same distances bit for bit (docs/fidelity.md §SIFT-16).
 
 use core::arch::wasm32::*;
 

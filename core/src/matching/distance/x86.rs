@@ -1,5 +1,6 @@
 //! The x86 distance kernels (AVX-512 BW with and without VNNI, AVX2) on the
-//! exact integer sums of `super`: the same distances bit for bit.
+//! exact integer sums of `super`: the same distances bit for bit
+//! (docs/fidelity.md §SIFT-16).
 
 use std::arch::x86_64::*;
 

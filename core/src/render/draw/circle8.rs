@@ -1,5 +1,6 @@
 //! OpenCV's `Circle`: the midpoint circle `cv2.circle` draws for thickness
-//! 1 or −1 with LINE_8 and no shift.
+//! 1 or −1 with LINE_8 and no shift (the lab's `view_info` and trajectory
+//! dots, docs/fidelity.md §LAB-4).
 
 use super::pixel::{hline, put};
 use image::{Rgb, RgbImage};

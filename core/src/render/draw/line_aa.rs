@@ -1,5 +1,6 @@
 //! OpenCV's `LineAA`: a 3-pixel-wide, Gaussian-filtered anti-aliased line
-//! between fixed-point points (the LINE_AA of `drawMatchesKnn`).
+//! between fixed-point points (the LINE_AA of `drawMatchesKnn`,
+//! docs/fidelity.md §LAB-4).
 
 use super::clip::Walk;
 use super::pixel::{XY_ONE, XY_SHIFT};

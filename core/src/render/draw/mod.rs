@@ -5,7 +5,8 @@
 //! (`LineAA`), `circle8` (the midpoint `Circle`), `fill`
 //! (`FillConvexPoly`) and `thick` (`ThickLine`, `PolyLine`, `EllipseEx`).
 //! [`circle`] and [`line`] are `cv2.circle` and `cv2.line`. Colours are RGB
-//! here; OpenCV's `Scalar(b, g, r)` is `Rgb([r, g, b])`.
+//! here; OpenCV's `Scalar(b, g, r)` is `Rgb([r, g, b])`. Which line type
+//! each lab picture uses is in docs/fidelity.md §LAB-4.
 
 mod circle8;
 mod clip;

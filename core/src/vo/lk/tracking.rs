@@ -278,12 +278,16 @@ impl Track {
         let level = cx.level;
         let scale = 1.0 / (1u32 << level) as f32;
         let p = [prev_pt[0] * scale, prev_pt[1] * scale];
+        // §VO-2.4 "Initial guess": the point itself at the top level, below
+        // it twice the coarser level's result, stored at once.
         let guess = if level == cx.max_level { p } else { [next[0] * 2.0, next[1] * 2.0] };
         *next = guess;
 
         let q = [p[0] - HALF_WIN, p[1] - HALF_WIN];
         let (ix, iy) = (q[0].floor() as i32, q[1].floor() as i32);
         if out_of_bounds(ix, iy, cx.prev.w, cx.prev.h) {
+            // §VO-2.4 "Template window": skip the level; only level 0 sets
+            // status 0 and err 0 (the one status-0 err OpenCV initialises).
             if level == 0 {
                 *status = false;
                 *err = 0.0;
@@ -293,6 +297,8 @@ impl Track {
         let wts = weights(q[0] - ix as f32, q[1] - iy as f32);
         let (s11, s12, s22) = K::load_patch(cx.prev, cx.deriv, ix, iy, &wts, patch);
         let (a11, a12, a22) = (s11 * FLT_SCALE, s12 * FLT_SCALE, s22 * FLT_SCALE);
+        // §VO-2.4 "Structure tensor": D and the smaller eigenvalue over the
+        // window area 2·21², separately rounded f32 operations.
         let det = a11 * a22 - a12 * a12;
         let min_eig = (a22 + a11 - ((a11 - a22) * (a11 - a22) + 4.0 * a12 * a12).sqrt()) / (2 * WIN * WIN) as f32;
         if min_eig < cx.min_eig_threshold || det < f32::EPSILON {
@@ -339,10 +345,14 @@ impl Track {
             let w = weights(n[0] - jx as f32, n[1] - jy as f32);
             let (b1, b2) = K::mismatch(cx.next, jx, jy, &w, patch);
             let (a11, a12, a22, dinv) = (self.a11, self.a12, self.a22, self.dinv);
+            // §VO-2.4 steps 4 and 5: the step by the inverse tensor, no fusing.
             let delta = [(a12 * b2 - a22 * b1) * dinv, (a12 * b1 - a11 * b2) * dinv];
             self.n = [n[0] + delta[0], n[1] + delta[1]];
             *next = [self.n[0] + HALF_WIN, self.n[1] + HALF_WIN];
             let prev_delta = self.prev_delta;
+            // §VO-2.4 step 6 (converged, in f64) is tested before step 7
+            // (oscillation, from the second iteration), so a converged step
+            // is never halved.
             if (delta[0] as f64) * (delta[0] as f64) + (delta[1] as f64) * (delta[1] as f64) <= cx.crit.1 {
                 false
             } else if self.j > 0
@@ -364,7 +374,8 @@ impl Track {
         go_on
     }
 
-    /// The error of a point still tracked after level 0.
+    /// The error of a point still tracked after level 0 (§VO-2.5): the window
+    /// at the final position again, Σ|J − T| over 21²·32.
     #[inline(always)]
     fn finish<K: Kernels>(cx: &LevelCtx, next: &[f32; 2], status: &mut bool, err: &mut f32, patch: &mut K::Patch) {
         if *status && cx.level == 0 {
@@ -381,6 +392,8 @@ impl Track {
     }
 }
 
+/// §VO-2.4's bounds rule for a window corner: up to 21 pixels (the padding)
+/// left of or above the level, never at or past its far edge.
 #[inline]
 fn out_of_bounds(ix: i32, iy: i32, w: usize, h: usize) -> bool {
     ix < -(WIN as i32) || ix >= w as i32 || iy < -(WIN as i32) || iy >= h as i32

@@ -160,9 +160,9 @@ fn jacobi_impl(at: &mut [f64], m: usize, n: usize, n1: usize, w: &mut [f64], vt:
     }
 }
 
-/// JacobiSVD's selection sort of the singular values, descending: only a
-/// strictly greater value moves the pick, so the first of equal maxima
-/// wins. `swap(i, j)` moves what goes with values i and j.
+/// JacobiSVD's selection sort of the singular values, descending (§VO-3.5
+/// step 4): only a strictly greater value moves the pick, so the first of
+/// equal maxima wins. `swap(i, j)` moves what goes with values i and j.
 #[inline(always)]
 fn sort_descending(w: &mut [f64], mut swap: impl FnMut(usize, usize)) {
     let n = w.len();

@@ -4,7 +4,7 @@
 //! the data-dependent branches become per-lane selects, and `hypot` is
 //! glibc's own algorithm, so each lane's null vector is the scalar one bit
 //! for bit (the tests compare them, and the vector `hypot` with the C
-//! library's).
+//! library's). docs/fidelity.md §VO-3.5 (the SVD), §VO-4 (its use).
 
 use std::arch::x86_64::*;
 

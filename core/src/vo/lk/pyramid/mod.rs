@@ -18,7 +18,8 @@ const PAD: usize = WIN;
 const SLACK: usize = 32;
 
 /// `cv::pyrDown` on 8-bit data, exact integer arithmetic: the 5×5 binomial
-/// kernel (sum 256) over reflect-101 of the source level, `+128 >> 8`.
+/// kernel (sum 256) over reflect-101 of the source level, `+128 >> 8`
+/// (§VO-2.2; truncating instead moved 92 % of the tracked points).
 pub fn pyr_down(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, usize) {
     #[cfg(target_arch = "x86_64")]
     if crate::simd::avx2() && w >= 40 {
@@ -148,8 +149,9 @@ impl Pyramid {
     }
 }
 
-/// Scharr derivatives of one level (`calcSharrDeriv`): no scaling, reflect-101
-/// inside the level, then a PAD-pixel border of zeros (BORDER_CONSTANT).
+/// Scharr derivatives of one level (`calcSharrDeriv`, §VO-2.3): no scaling,
+/// reflect-101 inside the level, then a PAD-pixel border of zeros
+/// (BORDER_CONSTANT).
 #[derive(Clone, Debug)]
 pub struct Deriv {
     pub(super) stride: usize,

@@ -33,7 +33,9 @@ const WS: usize = 24;
 type Win = [[i32; WS]; WIN];
 
 /// The four 14-bit bilinear weights OpenCV derives from the fractional part
-/// (each product an f32 operation in source order, rounded half-even).
+/// (each product an f32 operation in source order, rounded half-even:
+/// §VO-2.4 "Bilinear weights"; rounding half away moved 1 % of the points,
+/// §VO-2.7).
 #[inline(always)]
 pub(super) fn weights(a: f32, b: f32) -> [i32; 4] {
     let one = (1i32 << W_BITS) as f32;
@@ -44,7 +46,7 @@ pub(super) fn weights(a: f32, b: f32) -> [i32; 4] {
 }
 
 /// Interpolates a 21×21 window of a padded u8 level at top-left `(ix, iy)`
-/// into values ×32 (`CV_DESCALE(..., W_BITS - 5)`).
+/// into values ×32 (`CV_DESCALE(..., W_BITS - 5)`, §VO-2.4 "Template patch").
 #[inline(always)]
 fn warp_window(level: &Level, ix: i32, iy: i32, w: &[i32; 4], out: &mut Win) {
     let stride = level.stride;

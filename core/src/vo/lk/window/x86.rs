@@ -1,7 +1,8 @@
 //! The tracker's window kernels in AVX2, bit-identical to the scalar ones:
 //! 16-bit windows in the layout of [`super::wide`], `vpmaddwd` for the
 //! interpolation and the pair sums, exact integer sums with OpenCV's f32
-//! order replayed only where a bound requires it.
+//! order replayed only where a bound requires it (docs/fidelity.md §VO-2.4;
+//! the layout and the exactness rule are in `wide`).
 
 use super::wide::{self, Acc, Patch, Row, Win16};
 use super::{Deriv, Kernels, Level, WIN};
