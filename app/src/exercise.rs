@@ -2,7 +2,7 @@
 //! a seed, so the same link gives every student the same questions.
 
 use crate::state::get_info_command;
-use siftlab_core::matching::strategy::StrategyKind;
+use siftlab_core::matching::StrategyKind;
 
 /// SplitMix64: tiny, well distributed, and identical on every platform.
 #[derive(Debug, Clone)]

@@ -6,7 +6,7 @@
 
 use crate::state::{parse_feature, parse_threshold};
 use siftlab_core::manual::{ManualExample, EXAMPLES};
-use siftlab_core::matching::strategy::StrategyKind;
+use siftlab_core::matching::StrategyKind;
 
 /// The threshold box's text for an example, as the manual writes `-t`
 /// (`100`, `0.97`; empty for `nn` without one).

@@ -3,7 +3,7 @@
 
 use crate::client::Frame;
 use leptos::prelude::*;
-use siftlab_core::matching::strategy::StrategyKind;
+use siftlab_core::matching::StrategyKind;
 use siftlab_core::matching::{explain, Explanation, Strategy};
 use siftlab_core::sift::KeyPoint;
 use std::sync::Arc;

@@ -9,7 +9,7 @@
 //! Values are kept as the user typed them (the threshold text in particular):
 //! validation is the core's job (`Strategy::parse`), not the URL's.
 
-use siftlab_core::matching::strategy::StrategyKind;
+use siftlab_core::matching::StrategyKind;
 use wasm_bindgen::JsCast;
 
 #[derive(Debug, Clone, PartialEq, Default)]

@@ -3,7 +3,7 @@
 
 use crate::msg::{FromWorker, SiftResult, ToWorker};
 use siftlab_core::sift::{detect_and_compute, SiftParams};
-use siftlab_core::vo::odometry::sift_detector;
+use siftlab_core::vo::sift_detector;
 use siftlab_core::GrayImage;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -47,7 +47,7 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
                     features,
                     decode_ms: t1 - t0,
                     sift_ms: t2 - t1,
-                    engine: siftlab_core::sift::num::fma_engine().to_string(),
+                    engine: siftlab_core::sift::fma_engine().to_string(),
                 },
             });
         }
@@ -90,7 +90,7 @@ struct VoSession {
     id: u32,
     total: usize,
     poses: Vec<siftlab_core::dataset::PoseRow>,
-    odo: siftlab_core::vo::odometry::Odometry,
+    odo: siftlab_core::vo::Odometry,
     est: Vec<[f64; 3]>,
     truth: Vec<[f64; 3]>,
     t0: f64,
@@ -100,7 +100,7 @@ impl VoSession {
     /// Checks the poses before any frame is read, as the CLI does.
     fn start(id: u32, total: usize, poses: &str) -> Result<Self, String> {
         use siftlab_core::dataset::parse_poses;
-        use siftlab_core::vo::{odometry::Odometry, Camera};
+        use siftlab_core::vo::{Camera, Odometry};
         let t0 = now_ms();
         let poses = parse_poses(poses).map_err(|e| format!("poses/00.txt: {e}"))?;
         if poses.len() < total {
@@ -126,8 +126,8 @@ impl VoSession {
         post: &dyn Fn(FromWorker),
     ) -> Result<(), String> {
         use siftlab_core::dataset::position;
-        use siftlab_core::render::{encode_png, trajectory};
-        use siftlab_core::vo::metrics::ate_rmse;
+        use siftlab_core::render::{encode_png, trajectory_window, TrajectoryStyle};
+        use siftlab_core::vo::ate_rmse;
         if i != self.est.len() || i >= self.total {
             return Err(format!("frame {i} arrived out of order (expected frame {})", self.est.len()));
         }
@@ -149,8 +149,8 @@ impl VoSession {
         });
         if i + 1 == self.total {
             let ate = ate_rmse(&self.est, &self.truth).map_err(|e| e.to_string())?;
-            let style = trajectory::Style::default();
-            let png = encode_png(&trajectory::draw(&self.truth, &self.est, &style)).map_err(|e| e.to_string())?;
+            let style = TrajectoryStyle::default();
+            let png = encode_png(&trajectory_window(&self.truth, &self.est, &style)).map_err(|e| e.to_string())?;
             post(FromWorker::VoDone { id: self.id, ate, png, ms: now_ms() - self.t0 });
         }
         Ok(())

@@ -15,7 +15,7 @@ use siftlab_app::components::{apply_url, url_state, Explorer, DEMO_FEATURE};
 use siftlab_app::msg::{FromWorker, SiftResult, ToWorker};
 use siftlab_app::state::{analyse, nearest_keypoint, Lab, Source};
 use siftlab_app::urlstate::UrlState;
-use siftlab_core::matching::strategy::StrategyKind;
+use siftlab_core::matching::StrategyKind;
 use siftlab_core::sift::{Features, KeyPoint};
 use std::sync::Arc;
 use wasm_bindgen::JsCast;

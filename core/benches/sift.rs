@@ -11,9 +11,9 @@
 use std::path::Path;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
-use siftlab_core::sift::blur::gaussian_blur;
-use siftlab_core::sift::initial::initial_image;
-use siftlab_core::sift::pyramid::level_sigmas;
+use siftlab_core::internals::gaussian_blur;
+use siftlab_core::internals::initial_image;
+use siftlab_core::internals::level_sigmas;
 use siftlab_core::sift::{detect_and_compute, SiftParams};
 use siftlab_core::GrayImage;
 
@@ -64,7 +64,7 @@ fn bench_octave0_blurs(c: &mut Criterion) {
     // frame per core (`par::serial`).
     g.bench_function("octave0_blurs_2482x752_1t", |b| {
         b.iter(|| {
-            siftlab_core::sift::par::serial(|| {
+            siftlab_core::internals::serial(|| {
                 let mut level = gaussian_blur(black_box(&base), sigmas[1]);
                 for &s in &sigmas[2..] {
                     level = gaussian_blur(&level, s);

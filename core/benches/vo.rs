@@ -14,8 +14,8 @@
 mod common;
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use siftlab_core::internals::calc_optical_flow_pyr_lk_portable;
 use siftlab_core::sift::{detect, SiftParams};
-use siftlab_core::vo::lk::calc_optical_flow_pyr_lk_portable;
 use siftlab_core::vo::{calc_optical_flow_pyr_lk, find_essential_mat, recover_pose, Camera, LkParams, RansacParams};
 
 fn bench_vo(c: &mut Criterion) {

@@ -25,9 +25,10 @@ use std::collections::HashMap;
 use std::fs;
 use std::sync::{Arc, Mutex, OnceLock};
 
+use siftlab_core::internals as par;
 use siftlab_core::manual::EXAMPLES;
 use siftlab_core::matching::{match_feature, matching_info, Strategy};
-use siftlab_core::sift::{detect, detect_and_compute, par, Features, KeyPoint};
+use siftlab_core::sift::{detect, detect_and_compute, Features, KeyPoint};
 use siftlab_core::GrayImage;
 
 /// Our SIFT of fixture frame `id` at `set`'s SIMD width, computed once per test

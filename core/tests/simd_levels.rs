@@ -2,7 +2,7 @@
 //!
 //! A machine with AVX-512 only runs its AVX-512 kernels, but most students'
 //! laptops run the AVX2 ones, and a CPU without AVX2 the plain Rust ones.
-//! `siftlab_core::simd::set_cap` makes this machine run those instead; each
+//! `siftlab_core::internals::set_cap` makes this machine run those instead; each
 //! level must give OpenCV's keypoints and descriptors bit for bit (the `noipp`
 //! goldens, as `golden.rs` demands of the uncapped run): the AVX2 kernels on
 //! both golden sets (OpenCV at 16 and at 8 lanes), the plain ones on the

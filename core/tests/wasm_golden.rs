@@ -247,7 +247,7 @@ fn random_f32(seed: u64) -> impl FnMut(u32) -> f32 {
 #[wasm_bindgen_test]
 fn simd_fma_emulation_equals_the_scalar_one() {
     use core::arch::wasm32::*;
-    use siftlab_core::sift::num::{fma_emulated, fma_emulated_x4};
+    use siftlab_core::internals::num::{fma_emulated, fma_emulated_x4};
     let mut random = random_f32(0x9E37_79B9_7F4A_7C15);
     let mut checked = 0;
     for round in 0..250_000 {
@@ -302,7 +302,7 @@ fn simd_fma_emulation_equals_the_scalar_one() {
 /// from 0 to beyond exp32f's clamp. Lengths not a multiple of 4 check the scalar tail.
 #[wasm_bindgen_test]
 fn gradient_kernels_equal_the_scalar_ones() {
-    use siftlab_core::sift::num::{exp32f, fast_atan2_deg, gradient_directions, gradient_samples, magnitude};
+    use siftlab_core::internals::num::{exp32f, fast_atan2_deg, gradient_directions, gradient_samples, magnitude};
     let mut random = random_f32(0x243F_6A88_85A3_08D3);
     let edges = [0.0f32, -0.0, 1.0, -1.0, 0.5, -0.5, 255.0, -255.0, 1e-30, -1e-30];
     let (mut dxs, mut dys) = (Vec::new(), Vec::new());
@@ -340,7 +340,7 @@ fn gradient_kernels_equal_the_scalar_ones() {
 #[cfg(feature = "relaxed-simd")]
 #[wasm_bindgen_test]
 fn relaxed_madd_is_fused_here_and_equals_the_exact_fma() {
-    use siftlab_core::sift::num::{fma, fma_emulated, fma_engine, relaxed_madd_is_fused};
+    use siftlab_core::internals::num::{fma, fma_emulated, fma_engine, relaxed_madd_is_fused};
     assert!(
         relaxed_madd_is_fused(),
         "this engine's relaxed_madd is not fused: the relaxed build falls back to the emulation, \
@@ -366,7 +366,7 @@ include!("../src/vo/testdata/lk_golden.rs");
 /// gradients force the replay of OpenCV's f32 order.
 #[wasm_bindgen_test]
 fn lk_in_the_browser_is_bit_exact() {
-    use siftlab_core::vo::lk::calc_optical_flow_pyr_lk_portable;
+    use siftlab_core::internals::calc_optical_flow_pyr_lk_portable;
     use siftlab_core::vo::{calc_optical_flow_pyr_lk, LkParams, LkResult};
     let lk = LkParams::default();
     let bits = |r: &LkResult, i: usize| [r.next_pts[i][0].to_bits(), r.next_pts[i][1].to_bits()];
@@ -435,9 +435,9 @@ fn lk_in_the_browser_is_bit_exact() {
 /// A plain separable Gaussian filter on the exact scalar FMA, as docs/fidelity.md §SIFT-3 states it: row
 /// pass (first tap a product, then one FMA per tap, BORDER_REFLECT_101), then the
 /// symmetric column pass (centre product, then one FMA per pair of rows).
-fn reference_blur(src: &siftlab_core::sift::image::Plane, sigma: f64) -> Vec<f32> {
-    use siftlab_core::sift::blur::gaussian_kernel;
-    use siftlab_core::sift::num::fma_emulated;
+fn reference_blur(src: &siftlab_core::internals::Plane, sigma: f64) -> Vec<f32> {
+    use siftlab_core::internals::gaussian_kernel;
+    use siftlab_core::internals::num::fma_emulated;
     let (w, h) = (src.width, src.height);
     let k = gaussian_kernel(sigma);
     let r = k.len() / 2;
@@ -481,8 +481,8 @@ fn reference_blur(src: &siftlab_core::sift::image::Plane, sigma: f64) -> Vec<f32
 /// its levels.
 #[wasm_bindgen_test]
 fn blur_in_the_browser_equals_the_scalar_filter() {
-    use siftlab_core::sift::blur::gaussian_blur;
-    use siftlab_core::sift::image::Plane;
+    use siftlab_core::internals::gaussian_blur;
+    use siftlab_core::internals::Plane;
     let mut state = 0x2545_F491_4F6C_DD1Du64;
     let mut next = move || {
         state ^= state << 13;

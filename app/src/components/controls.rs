@@ -2,7 +2,7 @@
 
 use crate::state::{get_info_command, parse_threshold, strategy_label, threshold_hint, Lab, Source, Which};
 use leptos::prelude::*;
-use siftlab_core::matching::strategy::StrategyKind;
+use siftlab_core::matching::StrategyKind;
 
 #[component]
 pub fn Controls() -> impl IntoView {

@@ -6,7 +6,7 @@ use crate::loading;
 use crate::plot::{bar_y, chart_ymax, curve_points, curve_y, descriptor_cells, descriptor_rows, threshold_line};
 use crate::state::{Analysis, Lab, Which};
 use leptos::prelude::*;
-use siftlab_core::matching::info::py_int;
+use siftlab_core::matching::py_int;
 use siftlab_core::matching::Verdict;
 use siftlab_core::pyfmt::{py_f32, py_float};
 use siftlab_core::sift::SiftParams;

@@ -23,7 +23,7 @@ use crate::loading;
 use crate::state::{Lab, Source};
 use crate::urlstate::UrlState;
 use leptos::prelude::*;
-use siftlab_core::matching::strategy::StrategyKind;
+use siftlab_core::matching::StrategyKind;
 
 /// The whole explorer for a given state (tests mount this with their own `Lab`).
 #[component]

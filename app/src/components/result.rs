@@ -27,8 +27,8 @@ fn render_png(lab: Lab, which: Picture) -> Result<Vec<u8>, String> {
     let ci = GrayImage::new(c.width, c.height, c.gray.clone()).map_err(e)?;
     let (pk, ck, m) = (&p.features.keypoints, &c.features.keypoints, &a.explanation.matches);
     let img = match which {
-        Picture::Feature => render::matches::draw_feature(&pi, pk, &ci, ck, m).map_err(e)?,
-        Picture::Info => render::info::draw(&pi, pk, &ci, ck, m, &a.explanation.info).map_err(e)?,
+        Picture::Feature => render::view_feature(&pi, pk, &ci, ck, m).map_err(e)?,
+        Picture::Info => render::view_info(&pi, pk, &ci, ck, m, &a.explanation.info).map_err(e)?,
     };
     render::encode_png(&img).map_err(e)
 }

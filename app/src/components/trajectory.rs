@@ -11,7 +11,7 @@ use crate::msg::FromWorker;
 use crate::plot::{fit_xz, percent, polyline_xz, vo_done_text, vo_progress_text};
 use crate::state::Lab;
 use leptos::prelude::*;
-use siftlab_core::render::trajectory::coordinates_text;
+use siftlab_core::render::coordinates_text;
 
 type P3 = [f64; 3];
 /// One plotted step: frame, estimate, ground truth.

@@ -6,13 +6,13 @@
 // holds, also inside `unsafe fn`s.
 #![deny(unsafe_op_in_unsafe_fn)]
 
-pub mod distance;
-pub mod explain;
-pub mod info;
-pub mod knn;
-pub mod strategy;
+pub(crate) mod distance;
+pub(crate) mod explain;
+pub(crate) mod info;
+pub(crate) mod knn;
+pub(crate) mod strategy;
 
 pub use explain::{explain, mistaken_answers, Explanation, Mistake, Verdict};
-pub use info::{matching_info, MatchInfo};
+pub use info::{matching_info, py_int, MatchInfo};
 pub use knn::{knn_match, DMatch};
-pub use strategy::{match_all, match_feature, Strategy};
+pub use strategy::{check_feature, match_all, match_feature, Strategy, StrategyKind};

@@ -226,7 +226,7 @@ pub fn match_all(s: &Strategy, prev: &Features, cur: &Features) -> Result<Vec<Ve
     #[cfg(not(target_arch = "wasm32"))]
     {
         use std::sync::atomic::{AtomicUsize, Ordering};
-        let threads = crate::sift::par::cores();
+        let threads = crate::par::cores();
         if threads > 1 && n >= 64 {
             // Small blocks of queries taken from a shared counter rather than
             // one fixed share per thread: on a busy machine a thread that is

@@ -11,51 +11,18 @@ use super::draw::{circle, line};
 use crate::error::{Error, Result};
 use crate::image::GrayImage;
 use crate::matching::DMatch;
+use crate::rng::CvRng;
 use crate::sift::KeyPoint;
 use image::{Rgb, RgbImage};
 
-/// `cv::RNG`: a multiply-with-carry generator. `cv::theRNG()` starts at
-/// state 0xffffffff in every thread; SIFT, the matcher and the lab's
-/// findEssentialMat (which seeds its own local RNG) never touch it, so a
-/// single drawMatchesKnn call in a fresh process, as in the lab, always
-/// gets the same colours.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct CvRng {
-    pub state: u64,
-}
-
-impl CvRng {
-    /// `cv::RNG`'s multiplier (CV_RNG_COEFF).
-    const COEFF: u64 = 4164903690;
-
-    /// `cv::theRNG()` of a fresh thread.
-    pub fn the_rng() -> Self {
-        CvRng { state: 0xffff_ffff }
-    }
-
-    /// `RNG::next()`.
-    pub fn next_u32(&mut self) -> u32 {
-        self.state = (self.state as u32 as u64).wrapping_mul(Self::COEFF).wrapping_add(self.state >> 32);
-        self.state as u32
-    }
-
-    /// `rng(n)`, i.e. `uniform(0, n)` for unsigned `n > 0`: `next() % n`.
-    pub fn below(&mut self, n: u32) -> u32 {
-        if n == 0 {
-            return 0;
-        }
-        self.next_u32() % n
-    }
-
-    /// `Scalar(rng(256), rng(256), rng(256))` as an RGB colour. GCC
-    /// evaluates the three constructor arguments right to left, so the first
-    /// number drawn is the third (red, in OpenCV's BGR) component.
-    pub fn match_color(&mut self) -> Rgb<u8> {
-        let r = self.below(256) as u8;
-        let g = self.below(256) as u8;
-        let b = self.below(256) as u8;
-        Rgb([r, g, b])
-    }
+/// `Scalar(rng(256), rng(256), rng(256))` as an RGB colour. GCC evaluates
+/// the three constructor arguments right to left, so the first number drawn
+/// is the third (red, in OpenCV's BGR) component.
+fn match_color(rng: &mut CvRng) -> Rgb<u8> {
+    let r = rng.uniform(256) as u8;
+    let g = rng.uniform(256) as u8;
+    let b = rng.uniform(256) as u8;
+    Rgb([r, g, b])
 }
 
 /// OpenCV's `draw_shift_bits`: keypoints are drawn with 4 fractional bits.
@@ -122,7 +89,7 @@ pub fn draw_matches_knn(
                 kp2.len()
             ))
         })?;
-        let c = rng.match_color();
+        let c = match_color(rng);
         circle_in_region(&mut out, 0, w1, h1, (fixed(a.x), fixed(a.y)), c);
         circle_in_region(&mut out, w1, w2, h2, (fixed(b.x), fixed(b.y)), c);
         // draw.cpp: dpt2.x = min(pt2.x + img1.cols, outImg.cols - 1), in float.
@@ -190,8 +157,8 @@ mod tests {
         let first = r.next_u32();
         let expect = (0xffff_ffffu64 * 4164903690) as u32;
         assert_eq!(first, expect);
-        let mut r2 = CvRng { state: 0xffff_ffff };
-        assert_eq!(r2.below(256), expect % 256);
+        let mut r2 = CvRng::new(0xffff_ffff);
+        assert_eq!(r2.uniform(256), expect % 256);
     }
 
     #[test]

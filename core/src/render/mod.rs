@@ -17,14 +17,17 @@
 // holds, also inside `unsafe fn`s (render has none today).
 #![deny(unsafe_op_in_unsafe_fn)]
 
-pub mod draw;
-pub mod font;
-pub mod info;
-pub mod matches;
-pub mod trajectory;
+pub(crate) mod draw;
+pub(crate) mod font;
+pub(crate) mod info;
+pub(crate) mod matches;
+pub(crate) mod trajectory;
 
 use crate::error::{Error, Result};
 pub use image::RgbImage;
+pub use info::draw as view_info;
+pub use matches::draw_feature as view_feature;
+pub use trajectory::{coordinates_text, draw as trajectory_window, Style as TrajectoryStyle};
 
 /// Encodes an RGB image as PNG bytes (what `cv2.imwrite` would write, minus
 /// the BGR order OpenCV keeps in memory). Works on wasm: no file system.

@@ -37,22 +37,6 @@ impl Default for Style {
 }
 
 impl Style {
-    /// The lab's origin and canvas with the largest whole-number scale (1 to
-    /// 50) at which every point of both paths lands on the canvas at least
-    /// 10 pixels from its edges and below the caption band (y > 70), so a
-    /// short trajectory such as the synthetic 100-frame one fills the window.
-    /// Falls back to the lab's scale 1 when even that does not fit.
-    pub fn fitted(truth: &[[f64; 3]], estimate: &[[f64; 3]]) -> Style {
-        let base = Style::default();
-        let fits = |s: &Style| {
-            truth.iter().chain(estimate).all(|p| match s.to_pixel(p) {
-                Some((x, y)) => x >= 10 && x < s.width as i64 - 10 && y > 70 && y < s.height as i64 - 10,
-                None => true,
-            })
-        };
-        (1..=50).rev().map(|k| Style { scale: k as f64, ..base.clone() }).find(|s| fits(s)).unwrap_or(base)
-    }
-
     /// Python's `int(v * scale) + origin`: truncation toward zero. NaN has
     /// no pixel (the lab would raise; we skip the point).
     pub fn to_pixel(&self, p: &[f64; 3]) -> Option<(i64, i64)> {
@@ -170,19 +154,6 @@ mod tests {
     }
 
     #[test]
-    fn fitted_scale_fills_the_canvas() {
-        // 100 m forward, 20 m right: z*4+90 = 490 fits below 590, z*5 would not.
-        let truth = [[0.0, 0.0, 0.0], [20.0, 0.0, 100.0]];
-        let s = Style::fitted(&truth, &[[-3.0, 0.0, 99.0]]);
-        assert_eq!(s.scale, 4.0);
-        assert_eq!(s.origin, (290, 90));
-        // A path going backwards (into the caption) cannot be enlarged.
-        assert_eq!(Style::fitted(&[[0.0, 0.0, -30.0]], &[]).scale, 1.0);
-        // A 1 m path is capped at 50 px/m.
-        assert_eq!(Style::fitted(&[[0.5, 0.0, 1.0]], &[]).scale, 50.0);
-    }
-
-    #[test]
     fn scale_enlarges_and_far_or_nan_points_are_skipped() {
         let style = Style { scale: 4.0, ..Style::default() };
         let img = draw(&[[1.0, 0.0, 25.0], [f64::NAN, 0.0, 0.0], [1e300, 0.0, -1e300]], &[], &style);
@@ -235,14 +206,5 @@ mod lab_reference {
         let white =
             |im: &RgbImage| im.enumerate_pixels().filter(|(_, y, p)| (20..=60).contains(y) && p.0 == [255; 3]).count();
         assert!(white(&img) > 150 && white(&want) > 150);
-    }
-
-    /// Writes /tmp/siftlab_traj_demo.png (run with `--ignored` to look at it).
-    #[test]
-    #[ignore]
-    fn write_demo_png() {
-        let (truth, est) = paths();
-        let img = draw(&truth, &est, &Style::fitted(&truth, &est));
-        std::fs::write("/tmp/siftlab_traj_demo.png", super::super::encode_png(&img).unwrap()).unwrap();
     }
 }

@@ -28,7 +28,7 @@ impl Upsampled {
         let (w, h) = (img.width(), img.height());
         let w2 = 2 * w;
         let mut tmp = Plane::for_overwrite(w2, h);
-        super::par::for_each_chunk(&mut tmp.data, w2, |y0, rows| {
+        crate::par::for_each_chunk(&mut tmp.data, w2, |y0, rows| {
             for (dy, row) in rows.chunks_exact_mut(w2).enumerate() {
                 upsample_row(&img.data()[(y0 + dy) * w..(y0 + dy + 1) * w], row);
             }

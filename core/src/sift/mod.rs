@@ -14,27 +14,29 @@
 //! The stages are built from [`blur`] (the bit-exact Gaussian kernel and
 //! separable filter, §SIFT-3) and [`num`] (the exact math kernels, §SIFT-12,
 //! and the FMA used throughout), and pass [`keypoint`]'s types; [`image`]
-//! holds the planes and their buffer pool, [`par`] the scoped threads, and
+//! holds the planes and their buffer pool (the scoped threads are the
+//! crate's `par`), and
 //! `params` the parameters (§SIFT-1). A stage's module holds the plain
 //! algorithm in OpenCV's order and the dispatch; its x86 and wasm kernels
 //! live in `x86.rs` and `wasm.rs` beside it.
 
 #![deny(unsafe_op_in_unsafe_fn)]
 
-pub mod blur;
-pub mod descriptor;
-pub mod extrema;
-pub mod image;
-pub mod initial;
-pub mod keypoint;
-pub mod num;
-pub mod order;
-pub mod orientation;
-pub mod par;
+pub(crate) mod blur;
+pub(crate) mod descriptor;
+pub(crate) mod extrema;
+pub(crate) mod image;
+pub(crate) mod initial;
+pub(crate) mod keypoint;
+pub(crate) mod num;
+pub(crate) mod order;
+pub(crate) mod orientation;
+
 mod params;
 mod pipeline;
-pub mod pyramid;
+pub(crate) mod pyramid;
 
 pub use keypoint::{Features, KeyPoint};
+pub use num::fma_engine;
 pub use params::{host_opencv_lanes, SiftParams};
 pub use pipeline::{detect, detect_and_compute};

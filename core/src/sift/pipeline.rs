@@ -5,8 +5,9 @@
 use super::image::Plane;
 use super::keypoint::{Features, KeyPoint};
 use super::params::SiftParams;
-use super::{descriptor, extrema, initial, order, orientation, par, pyramid};
+use super::{descriptor, extrema, initial, order, orientation, pyramid};
 use crate::image::GrayImage;
+use crate::par;
 
 /// `detect`: the keypoints only, in OpenCV's order.
 pub fn detect(img: &GrayImage, p: &SiftParams) -> Vec<KeyPoint> {

@@ -4,10 +4,6 @@
 
 use crate::{Error, Result};
 
-/// `math.dist`, the lab's scale: kept with the ground-truth poses it
-/// measures (`dataset`), so that the dataset does not depend on the VO.
-pub use crate::dataset::dist3;
-
 /// Root mean square of the position differences.
 pub fn ate_rmse(est: &[[f64; 3]], gt: &[[f64; 3]]) -> Result<f64> {
     if est.len() != gt.len() || est.is_empty() {

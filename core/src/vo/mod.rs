@@ -11,19 +11,20 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 mod camera;
-pub mod five_point;
-pub mod linalg;
-pub mod lk;
-pub mod metrics;
-pub mod odometry;
-pub mod ransac;
-pub mod recover_pose;
+pub(crate) mod five_point;
+pub(crate) mod linalg;
+pub(crate) mod lk;
+pub(crate) mod metrics;
+pub(crate) mod odometry;
+pub(crate) mod ransac;
+pub(crate) mod recover_pose;
 #[cfg(test)]
 mod testing;
 
 pub use camera::Camera;
 pub use linalg::{det3, mat_mul, mat_vec, skew, transpose, Mat3, Vec3, IDENTITY};
 pub use lk::{calc_optical_flow_pyr_lk, LkParams, LkResult};
-pub use odometry::{Odometry, StepResult, Steps};
+pub use metrics::{ate_rmse, max_median, position_differences};
+pub use odometry::{pose_row, run, sift_detector, Odometry, StepResult, Steps};
 pub use ransac::{find_essential_mat, EssentialResult, RansacParams};
 pub use recover_pose::{recover_pose, Pose};

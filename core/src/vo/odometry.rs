@@ -317,7 +317,7 @@ pub fn run(
     load: impl FnMut(usize) -> Result<GrayImage> + Send,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<StepResult>> {
-    run_with_workers(odo, n, poses, load, progress, crate::sift::par::cores().clamp(1, 4))
+    run_with_workers(odo, n, poses, load, progress, crate::par::cores().clamp(1, 4))
 }
 
 /// [`run`] with `workers` detection threads natively (ignored on wasm32).
@@ -345,7 +345,7 @@ fn run_with_workers(
         let detector: Detector = std::mem::replace(&mut odo.detector, Box::new(|_| Vec::new()));
         let workers = workers.max(1);
         // The cores shared out: one each on this 2-core machine.
-        let per_worker = (crate::sift::par::cores() / workers).max(1);
+        let per_worker = (crate::par::cores() / workers).max(1);
         let detector_ref = &detector;
         let result = std::thread::scope(|s| -> Result<()> {
             let mut to_workers = Vec::with_capacity(workers);
@@ -359,8 +359,8 @@ fn run_with_workers(
                     for (i, frame) in rx_img {
                         // Frame 1 never re-detects (§VO-5: it only sets R, t).
                         let item = frame.map(|img| {
-                            let points = (first + i != 1)
-                                .then(|| crate::sift::par::with_threads(per_worker, || detector_ref(&img)));
+                            let points =
+                                (first + i != 1).then(|| crate::par::with_threads(per_worker, || detector_ref(&img)));
                             (img, points)
                         });
                         let failed = item.is_err();
@@ -389,7 +389,7 @@ fn run_with_workers(
                 }
                 Ok(())
             };
-            let tracked = crate::sift::par::with_threads(per_worker, track);
+            let tracked = crate::par::with_threads(per_worker, track);
             // Unblock and stop the other stages (a worker blocked on a send
             // sees its receiver gone; the reader then sees the workers gone).
             drop(from_workers);

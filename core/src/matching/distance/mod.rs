@@ -101,10 +101,6 @@ impl<'a> TrainSet<'a> {
     pub fn len(&self) -> usize {
         self.rows.len()
     }
-
-    pub fn is_empty(&self) -> bool {
-        self.rows.is_empty()
-    }
 }
 
 /// |t|^2 = the sum of squares of the bytes, at most 128 * 255^2.

@@ -17,8 +17,8 @@ mod pixel;
 mod thick;
 
 pub use circle8::circle8;
-pub use line_aa::line_aa;
-pub use pixel::{fill_rect, put, XY_ONE, XY_SHIFT};
+
+pub use pixel::{fill_rect, put, XY_SHIFT};
 
 use image::{Rgb, RgbImage};
 

@@ -92,7 +92,7 @@ pub fn gaussian_blur_rows<R: Rows>(src: &R, sigma: f64) -> Plane {
         }
         return out;
     }
-    super::par::for_each_chunk(&mut out.data, w, |y0, chunk| blur_rows(src, &kx, &ky, y0, chunk));
+    crate::par::for_each_chunk(&mut out.data, w, |y0, chunk| blur_rows(src, &kx, &ky, y0, chunk));
     out
 }
 

@@ -266,7 +266,7 @@ mod tests {
     /// ±threshold itself must not pass (|v| > thr).
     #[test]
     fn vector_extremum_test_matches_the_scalar_one() {
-        let mut rng = crate::vo::linalg::CvRng::new(0x2545_f491);
+        let mut rng = crate::rng::CvRng::new(0x2545_f491);
         let mut next = move || rng.next_u32();
         let mut found = 0;
         for w in [10usize, 17, 40, 67, 130] {

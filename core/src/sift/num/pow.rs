@@ -20,6 +20,7 @@ pub fn pow2f(y: f32) -> f32 {
 
 /// Correctly rounded 2^(j/32) with j<<47 subtracted (so the exponent can be
 /// added back as an integer), the table of glibc's exp2f/powf.
+#[cfg(any(target_arch = "wasm32", test))]
 const EXP2F_TAB: [u64; 32] = [
     0x3ff0000000000000,
     0x3fefd9b0d3158574,
@@ -56,6 +57,7 @@ const EXP2F_TAB: [u64; 32] = [
 ];
 
 /// glibc's `powf(2.0f, y)` for the finite, moderate y SIFT uses.
+#[cfg(any(target_arch = "wasm32", test))]
 pub fn pow2f_glibc(y: f32) -> f32 {
     const SHIFT: f64 = 211106232532992.0; // 0x1.8p52 / 32: rounds to multiples of 1/32
     const C0: f64 = f64::from_bits(0x3fac6af84b912394); // 0x1.c6af84b912394p-5

@@ -10,11 +10,12 @@
 mod lu;
 mod mat3;
 mod poly;
-mod rng;
 mod svd;
 
+pub use crate::rng::CvRng;
 pub use lu::lu_inverse;
 pub use mat3::{det3, mat_mul, mat_vec, skew, transpose, Mat3, Vec3, IDENTITY};
-pub use poly::{solve_poly, Complex};
-pub use rng::CvRng;
-pub use svd::{null_vector_4x4, null_vectors_4x4, svd, Svd};
+pub use poly::solve_poly;
+#[cfg(test)]
+pub use svd::null_vector_4x4;
+pub use svd::{null_vectors_4x4, svd};

@@ -148,8 +148,8 @@ fn moved(d: Complex) -> bool {
 
 #[cfg(test)]
 mod tests {
-    use super::super::rng::CvRng;
     use super::*;
+    use crate::rng::CvRng;
 
     #[test]
     fn moved_is_hypot_making_max_positive() {

@@ -21,7 +21,7 @@ mod tests;
 mod tracking;
 mod window;
 
-pub use pyramid::{build_pyramid, pyr_down, Deriv, Level, Pyramid};
+pub use pyramid::Pyramid;
 pub use tracking::{calc_optical_flow_pyr_lk, calc_optical_flow_pyr_lk_portable, calc_optical_flow_pyr_lk_pyramids};
 
 /// Window side (21×21); the lab never changes it.

@@ -105,7 +105,7 @@ fn track_ordered(prep: &Prepared, pts: &[[f32; 2]], params: &LkParams, scalar: b
     {
         // Within `par::with_threads`' cap: the odometry tracks on one core
         // while the detection workers take the others.
-        let threads = crate::sift::par::threads();
+        let threads = crate::par::threads();
         if threads > 1 && n >= 64 {
             let chunk = n.div_ceil(threads);
             std::thread::scope(|s| {

@@ -7,19 +7,22 @@
 //! rotation; with AVX2 four of those SVDs run as the lanes of f64 vectors
 //! (`x86`), each lane bit for bit the scalar one.
 
-use super::rng::CvRng;
+use crate::rng::CvRng;
 
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-/// Result of [`svd`]: `w` descending, `u` (m×ucols, row-major) and `vt`
+/// Result of [`svd`]: `w` descending, `u` (row-major, one column per singular value) and `vt`
 /// (vrows×n, row-major).
 #[derive(Clone, Debug)]
 pub struct Svd {
+    // recoverPose reads `u` and `vt` only; the singular values and shapes
+    // are kept for the tests that check the decomposition.
+    #[cfg_attr(not(test), allow(dead_code))]
     pub w: Vec<f64>,
     pub u: Vec<f64>,
-    pub ucols: usize,
     pub vt: Vec<f64>,
+    #[cfg_attr(not(test), allow(dead_code))]
     pub vrows: usize,
 }
 
@@ -199,9 +202,9 @@ pub fn svd(a: &[f64], m: usize, n: usize, full: bool) -> Svd {
     jacobi_impl(&mut at, len, count, n1, &mut w, &mut v);
     if transposed {
         // Vᵀ = the working vectors as rows, U = Vᵀ_workᵀ.
-        Svd { w, u: transposed_rows(&v, count, count), ucols: count, vt: at, vrows: n1 }
+        Svd { w, u: transposed_rows(&v, count, count), vt: at, vrows: n1 }
     } else {
-        Svd { w, u: transposed_rows(&at, n1, len), ucols: n1, vt: v, vrows: count }
+        Svd { w, u: transposed_rows(&at, n1, len), vt: v, vrows: count }
     }
 }
 

@@ -143,10 +143,6 @@ impl Pyramid {
     pub fn new(img: &GrayImage, max_level: usize) -> Pyramid {
         Pyramid { levels: build_pyramid(img, max_level) }
     }
-
-    pub fn size(&self) -> (usize, usize) {
-        (self.levels[0].w, self.levels[0].h)
-    }
 }
 
 /// Scharr derivatives of one level (`calcSharrDeriv`, §VO-2.3): no scaling,

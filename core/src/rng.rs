@@ -1,7 +1,10 @@
 //! `cv::RNG`, OpenCV's multiply-with-carry generator: RANSAC draws its
 //! samples from one reset to 2^64 − 1 on every call (docs/fidelity.md
 //! §VO-3.3), the Jacobi SVD completes its null space from one seeded with
-//! 0x12345678 (§VO-3.5 step 6).
+//! 0x12345678 (§VO-3.5 step 6), and `drawMatchesKnn` colours its matches
+//! from `cv::theRNG()`, which starts at 0xffffffff in every thread and which
+//! SIFT, the matcher and findEssentialMat never touch (so one drawing in a
+//! fresh process, as in the lab, always gets the same colours).
 
 /// `cv::RNG`: the multiply-with-carry generator OpenCV seeds per call.
 #[derive(Clone, Copy, Debug)]
@@ -15,6 +18,11 @@ impl CvRng {
 
     pub fn new(seed: u64) -> Self {
         CvRng { state: seed }
+    }
+
+    /// `cv::theRNG()` of a fresh thread.
+    pub fn the_rng() -> Self {
+        CvRng { state: 0xffff_ffff }
     }
 
     #[inline]
