@@ -56,6 +56,14 @@ fn circle_in_region(img: &mut RgbImage, x0: u32, w: u32, h: u32, center: (i64, i
     }
 }
 
+/// The keypoint a match names, or the error OpenCV would throw for an index
+/// past the end of that image's keypoints.
+fn keypoint<'a>(kps: &'a [KeyPoint], idx: usize, side: &str, image: &str) -> Result<&'a KeyPoint> {
+    kps.get(idx).ok_or_else(|| {
+        Error::InvalidArgument(format!("match {side} index {idx} but the {image} image has {} keypoints", kps.len()))
+    })
+}
+
 /// `cv2.drawMatchesKnn(img1, kp1, img2, kp2, matches, None, flags=2)` with
 /// the random colours drawn from `rng` (pass [`CvRng::the_rng`] for the
 /// lab's colours). A match naming a keypoint that does not exist is an
@@ -75,20 +83,8 @@ pub fn draw_matches_knn(
     image::imageops::replace(&mut out, &super::gray_to_rgb(img1), 0, 0);
     image::imageops::replace(&mut out, &super::gray_to_rgb(img2), w1 as i64, 0);
     for m in matches.iter().flatten() {
-        let a = kp1.get(m.query_idx).ok_or_else(|| {
-            Error::InvalidArgument(format!(
-                "match query index {} but the first image has {} keypoints",
-                m.query_idx,
-                kp1.len()
-            ))
-        })?;
-        let b = kp2.get(m.train_idx).ok_or_else(|| {
-            Error::InvalidArgument(format!(
-                "match train index {} but the second image has {} keypoints",
-                m.train_idx,
-                kp2.len()
-            ))
-        })?;
+        let a = keypoint(kp1, m.query_idx, "query", "first")?;
+        let b = keypoint(kp2, m.train_idx, "train", "second")?;
         let c = match_color(rng);
         circle_in_region(&mut out, 0, w1, h1, (fixed(a.x), fixed(a.y)), c);
         circle_in_region(&mut out, w1, w2, h2, (fixed(b.x), fixed(b.y)), c);

@@ -157,31 +157,14 @@ mod tests {
     /// every width from 1 (both ends replicated) to 40.
     #[test]
     fn upsample_row_is_inter_linear() {
-        let mut s = 0x2545_f491u32;
+        let mut rng = crate::testutil::XorShift64::new(0x2545_f491);
         for w in 1..=40usize {
-            let src: Vec<u8> = (0..w)
-                .map(|_| {
-                    s ^= s << 13;
-                    s ^= s >> 17;
-                    s ^= s << 5;
-                    s as u8
-                })
-                .collect();
+            let src: Vec<u8> = (0..w).map(|_| rng.byte()).collect();
             let mut out = vec![f32::NAN; 2 * w];
             upsample_row(&src, &mut out);
             for (t, &got) in out.iter().enumerate() {
-                let m = t / 2;
-                let (a, b, f) = if t % 2 == 0 {
-                    if m == 0 {
-                        (0, 0, 0.0)
-                    } else {
-                        (m - 1, m, 0.75)
-                    }
-                } else if m + 1 >= w {
-                    (w - 1, w - 1, 0.0)
-                } else {
-                    (m, m + 1, 0.25)
-                };
+                // The unrolled row against the tap rule the vertical pass uses.
+                let (a, b, f) = vertical_taps(t, w);
                 let want = src[a] as f32 * (1.0 - f) + src[b] as f32 * f;
                 assert_eq!(got.to_bits(), want.to_bits(), "w {w}, t {t}");
             }

@@ -49,14 +49,19 @@ const fn find(table: &[(u8, u8, u8)], e: (u8, u8, u8)) -> usize {
     usize::MAX
 }
 
-const fn build_ll() -> [[usize; 4]; 4] {
-    let mut t = [[0; 4]; 4];
+/// `t[i][j]`: where in `product` the monomial `left[i]·right[j]` stands.
+const fn product_table<const A: usize, const B: usize>(
+    left: &[(u8, u8, u8); A],
+    right: &[(u8, u8, u8); B],
+    product: &[(u8, u8, u8)],
+) -> [[usize; B]; A] {
+    let mut t = [[0; B]; A];
     let mut i = 0;
-    while i < 4 {
+    while i < A {
         let mut j = 0;
-        while j < 4 {
-            let (a, b) = (LIN[i], LIN[j]);
-            t[i][j] = find(&QUAD, (a.0 + b.0, a.1 + b.1, a.2 + b.2));
+        while j < B {
+            let (a, b) = (left[i], right[j]);
+            t[i][j] = find(product, (a.0 + b.0, a.1 + b.1, a.2 + b.2));
             j += 1;
         }
         i += 1;
@@ -64,23 +69,8 @@ const fn build_ll() -> [[usize; 4]; 4] {
     t
 }
 
-const fn build_ql() -> [[usize; 4]; 10] {
-    let mut t = [[0; 4]; 10];
-    let mut i = 0;
-    while i < 10 {
-        let mut j = 0;
-        while j < 4 {
-            let (a, b) = (QUAD[i], LIN[j]);
-            t[i][j] = find(&CUBIC, (a.0 + b.0, a.1 + b.1, a.2 + b.2));
-            j += 1;
-        }
-        i += 1;
-    }
-    t
-}
-
-const LL: [[usize; 4]; 4] = build_ll();
-const QL: [[usize; 4]; 10] = build_ql();
+const LL: [[usize; 4]; 4] = product_table(&LIN, &LIN, &QUAD);
+const QL: [[usize; 4]; 10] = product_table(&QUAD, &LIN, &CUBIC);
 
 type Lin = [f64; 4];
 type Quad = [f64; 10];
