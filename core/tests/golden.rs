@@ -84,6 +84,16 @@ fn sift_is_bit_exact_against_opencv_without_ipp() {
     );
 }
 
+/// Position, size, response and octave bit-equal (everything but the angle,
+/// which IPP's exp moves in the last bits: docs/fidelity.md §SIFT-14).
+fn same_geometry(a: &KeyPoint, b: &KeyPoint) -> bool {
+    a.x.to_bits() == b.x.to_bits()
+        && a.y.to_bits() == b.y.to_bits()
+        && a.size.to_bits() == b.size.to_bits()
+        && a.response.to_bits() == b.response.to_bits()
+        && a.octave == b.octave
+}
+
 /// Every keypoint and descriptor of `set`'s `noipp` goldens against ours,
 /// bit for bit: (keypoints compared, one line per difference).
 fn noipp_differences(set: &GoldenSet) -> (usize, Vec<String>) {
@@ -95,13 +105,7 @@ fn noipp_differences(set: &GoldenSet) -> (usize, Vec<String>) {
         assert_eq!(ours.keypoints.len(), golden.keypoints.len(), "{} {id}: keypoint count", set.name);
         for (i, (a, b)) in ours.keypoints.iter().zip(&golden.keypoints).enumerate() {
             total += 1;
-            let same = a.x.to_bits() == b.x.to_bits()
-                && a.y.to_bits() == b.y.to_bits()
-                && a.size.to_bits() == b.size.to_bits()
-                && a.angle.to_bits() == b.angle.to_bits()
-                && a.response.to_bits() == b.response.to_bits()
-                && a.octave == b.octave;
-            if !same {
+            if !(same_geometry(a, b) && a.angle.to_bits() == b.angle.to_bits()) {
                 report.push(format!("{id} keypoint {i}:\n ours   {}\n opencv {}", fmt_kp(a), fmt_kp(b)));
             }
             let (da, db) = (&ours.descriptors[i], &golden.descriptors[i]);
@@ -170,12 +174,7 @@ fn within_ipp_tolerances(set: &GoldenSet) {
         assert_eq!(ours.keypoints.len(), golden.keypoints.len(), "{id}: keypoint count");
         for (i, (a, b)) in ours.keypoints.iter().zip(&golden.keypoints).enumerate() {
             total += 1;
-            let geo = a.x.to_bits() == b.x.to_bits()
-                && a.y.to_bits() == b.y.to_bits()
-                && a.size.to_bits() == b.size.to_bits()
-                && a.response.to_bits() == b.response.to_bits()
-                && a.octave == b.octave;
-            if !geo {
+            if !same_geometry(a, b) {
                 eprintln!("{id} keypoint {i} differs:\n ours   {}\n opencv {}", fmt_kp(a), fmt_kp(b));
                 continue;
             }

@@ -95,6 +95,34 @@ impl Parser<'_> {
             Err(format!("bad literal at byte {}", self.i))
         }
     }
+    /// The comma-separated items of an array or object, after its opening
+    /// bracket, up to and including `close`.
+    fn items<T>(
+        &mut self,
+        close: u8,
+        what: &str,
+        mut item: impl FnMut(&mut Self) -> Result<T, String>,
+    ) -> Result<Vec<T>, String> {
+        self.i += 1;
+        let mut v = Vec::new();
+        self.ws();
+        if self.peek() == Some(close) {
+            self.i += 1;
+            return Ok(v);
+        }
+        loop {
+            v.push(item(self)?);
+            self.ws();
+            match self.peek() {
+                Some(b',') => self.i += 1,
+                Some(c) if c == close => {
+                    self.i += 1;
+                    return Ok(v);
+                }
+                _ => return Err(format!("bad {what} at byte {}", self.i)),
+            }
+        }
+    }
     fn value(&mut self) -> Result<Json, String> {
         self.ws();
         match self.peek().ok_or("unexpected end")? {
@@ -102,51 +130,13 @@ impl Parser<'_> {
             b't' => self.lit("true", Json::Bool(true)),
             b'f' => self.lit("false", Json::Bool(false)),
             b'"' => Ok(Json::Str(self.string()?)),
-            b'[' => {
-                self.i += 1;
-                let mut v = Vec::new();
-                self.ws();
-                if self.peek() == Some(b']') {
-                    self.i += 1;
-                    return Ok(Json::Arr(v));
-                }
-                loop {
-                    v.push(self.value()?);
-                    self.ws();
-                    match self.peek() {
-                        Some(b',') => self.i += 1,
-                        Some(b']') => {
-                            self.i += 1;
-                            return Ok(Json::Arr(v));
-                        }
-                        _ => return Err(format!("bad array at byte {}", self.i)),
-                    }
-                }
-            }
-            b'{' => {
-                self.i += 1;
-                let mut kv = Vec::new();
-                self.ws();
-                if self.peek() == Some(b'}') {
-                    self.i += 1;
-                    return Ok(Json::Obj(kv));
-                }
-                loop {
-                    self.ws();
-                    let k = self.string()?;
-                    self.expect(b':')?;
-                    kv.push((k, self.value()?));
-                    self.ws();
-                    match self.peek() {
-                        Some(b',') => self.i += 1,
-                        Some(b'}') => {
-                            self.i += 1;
-                            return Ok(Json::Obj(kv));
-                        }
-                        _ => return Err(format!("bad object at byte {}", self.i)),
-                    }
-                }
-            }
+            b'[' => Ok(Json::Arr(self.items(b']', "array", |p| p.value())?)),
+            b'{' => Ok(Json::Obj(self.items(b'}', "object", |p| {
+                p.ws();
+                let k = p.string()?;
+                p.expect(b':')?;
+                Ok((k, p.value()?))
+            })?)),
             _ => {
                 let start = self.i;
                 while self.i < self.s.len()

@@ -26,9 +26,9 @@ pub use atan::fast_atan2_deg;
 pub use exp::exp32f;
 #[cfg(target_arch = "wasm32")]
 pub use fma::fma_emulated_x4;
-pub use fma::{fma, fma_emulated, fma_engine};
 #[cfg(all(target_arch = "wasm32", feature = "relaxed-simd"))]
 pub use fma::relaxed_madd_is_fused;
+pub use fma::{fma, fma_emulated, fma_engine};
 pub use gradient::{exp32f_into, gradient_directions, gradient_directions_into, gradient_samples, magnitude};
 pub use pow::pow2f;
 #[cfg(target_arch = "wasm32")]
