@@ -7,6 +7,10 @@
 //! the lab's commands draw ([`render`]). The CLI and the web app only load
 //! input, call this crate and show what it returns.
 
+// Every unsafe operation sits in its own block with the reason it is sound.
+#![deny(unsafe_op_in_unsafe_fn)]
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 mod border;
 #[cfg(all(feature = "cli", not(target_arch = "wasm32")))]
 pub mod cli;

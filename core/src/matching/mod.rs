@@ -4,7 +4,6 @@
 
 // Every unsafe operation sits in its own `unsafe` block with the reason it
 // holds, also inside `unsafe fn`s.
-#![deny(unsafe_op_in_unsafe_fn)]
 
 pub(crate) mod distance;
 pub(crate) mod explain;

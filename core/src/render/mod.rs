@@ -15,7 +15,6 @@
 
 // Every unsafe operation sits in its own `unsafe` block with the reason it
 // holds, also inside `unsafe fn`s (render has none today).
-#![deny(unsafe_op_in_unsafe_fn)]
 
 pub(crate) mod draw;
 pub(crate) mod font;

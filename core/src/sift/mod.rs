@@ -20,8 +20,6 @@
 //! algorithm in OpenCV's order and the dispatch; its x86 and wasm kernels
 //! live in `x86.rs` and `wasm.rs` beside it.
 
-#![deny(unsafe_op_in_unsafe_fn)]
-
 pub(crate) mod blur;
 pub(crate) mod descriptor;
 pub(crate) mod extrema;

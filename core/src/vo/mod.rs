@@ -8,7 +8,6 @@
 
 // Every unsafe operation sits in its own `unsafe` block with the reason it
 // holds, also inside `unsafe fn`s.
-#![deny(unsafe_op_in_unsafe_fn)]
 
 mod camera;
 pub(crate) mod five_point;
