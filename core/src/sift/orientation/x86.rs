@@ -99,7 +99,7 @@ pub fn bin_products(
         // start inside ONE_HOT, and its five vectors follow it there, each
         // 32-byte aligned (the table is 64-byte aligned, a bin 160 bytes).
         let m = unsafe { masks.add(off as usize) as *const f32 };
-        let pj = _mm256_broadcast_ss(p);
+        let pj = _mm256_set1_ps(*p);
         for (v, hv) in h.iter_mut().enumerate() {
             // SAFETY: as above, v < 5.
             *hv = _mm256_add_ps(*hv, _mm256_and_ps(unsafe { _mm256_load_ps(m.add(8 * v)) }, pj));
