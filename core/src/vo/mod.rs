@@ -2,7 +2,8 @@
 //! it (`docs/fidelity.md` §VO-1 to §VO-7): [`lk`] tracks points
 //! (`calcOpticalFlowPyrLK`), [`ransac`] estimates the essential matrix with the
 //! [`five_point`] kernel (`findEssentialMat`), [`recover_pose`](fn@recover_pose) picks R, t
-//! (`recoverPose`), [`odometry`] is the lab's accumulation loop, [`metrics`]
+//! (`recoverPose`), [`odometry`] is the lab's accumulation loop, [`matched`]
+//! the same loop driven by the student's matcher instead of LK, [`metrics`]
 //! scores a trajectory against ground truth. [`linalg`] holds the numeric
 //! routines they share (OpenCV's Jacobi SVD, LU inverse, `solvePoly`, `cv::RNG`).
 
@@ -14,6 +15,7 @@ mod camera;
 pub mod five_point;
 pub mod linalg;
 pub mod lk;
+pub mod matched;
 pub mod metrics;
 pub mod odometry;
 pub mod ransac;
