@@ -21,6 +21,7 @@ pub mod draw;
 pub mod font;
 pub mod info;
 pub mod matches;
+pub mod plot;
 pub mod trajectory;
 
 use crate::error::{Error, Result};

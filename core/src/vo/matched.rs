@@ -40,9 +40,12 @@ pub struct MatchedOdometry {
     prev_gt: Option<PoseRow>,
 }
 
+/// Matched pixel positions: (previous frame, current frame).
+pub type PointPairs = (Vec<[f32; 2]>, Vec<[f32; 2]>);
+
 /// The (previous, current) pixel positions of each query's first match, in
 /// query order, as f32 as the lab's arrays hold them.
-pub fn matched_points(strategy: &Strategy, prev: &Features, cur: &Features) -> Result<(Vec<[f32; 2]>, Vec<[f32; 2]>)> {
+pub fn matched_points(strategy: &Strategy, prev: &Features, cur: &Features) -> Result<PointPairs> {
     let matches = match_all(strategy, prev, cur)?;
     let (mut refs, mut curs) = (Vec::new(), Vec::new());
     for m in matches.iter().filter_map(|row| row.first()) {

@@ -12,6 +12,7 @@
 #![deny(unsafe_op_in_unsafe_fn)]
 
 mod camera;
+pub mod export;
 pub mod five_point;
 pub mod linalg;
 pub mod lk;
