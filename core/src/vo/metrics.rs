@@ -88,6 +88,34 @@ impl TrajectoryMetrics {
         )
     }
 
+    /// The seven numbers in declaration order, `None` as NaN: how the app's
+    /// worker posts them (a Float64Array).
+    pub fn to_array(&self) -> [f64; 7] {
+        [
+            self.frames as f64,
+            self.ate_rmse,
+            self.ate_rmse_aligned,
+            self.rpe_trans_rmse,
+            self.rpe_rot_rmse_deg,
+            self.kitti_t_err_pct.unwrap_or(f64::NAN),
+            self.kitti_r_err_deg_per_100m.unwrap_or(f64::NAN),
+        ]
+    }
+
+    /// The inverse of [`Self::to_array`].
+    pub fn from_array(a: &[f64; 7]) -> TrajectoryMetrics {
+        let opt = |v: f64| (!v.is_nan()).then_some(v);
+        TrajectoryMetrics {
+            frames: a[0] as usize,
+            ate_rmse: a[1],
+            ate_rmse_aligned: a[2],
+            rpe_trans_rmse: a[3],
+            rpe_rot_rmse_deg: a[4],
+            kitti_t_err_pct: opt(a[5]),
+            kitti_r_err_deg_per_100m: opt(a[6]),
+        }
+    }
+
     /// The figures in one line, for the CLI's stderr and the app's table.
     pub fn summary(&self) -> String {
         let kitti = match (self.kitti_t_err_pct, self.kitti_r_err_deg_per_100m) {

@@ -118,6 +118,7 @@ fn metrics_equal_the_numpy_reference() {
     let m = evaluate(&est, gt).unwrap();
     check(&m, &reference_case(&text, "drift_300"), "drift_300");
     assert!(m.kitti_t_err_pct.is_some());
+    assert_eq!(TrajectoryMetrics::from_array(&m.to_array()), m);
     assert!(m.to_json().starts_with("{\"frames\": 300, \"ate_rmse\": "), "{}", m.to_json());
 }
 
@@ -128,6 +129,7 @@ fn short_and_mismatched_inputs() {
     let m = evaluate(g, g).unwrap();
     assert_eq!((m.frames, m.ate_rmse, m.rpe_trans_rmse, m.kitti_t_err_pct), (1, 0.0, 0.0, None));
     assert!(m.to_json().ends_with("\"kitti_t_err_pct\": null, \"kitti_r_err_deg_per_100m\": null}"));
+    assert_eq!(TrajectoryMetrics::from_array(&m.to_array()), m);
     let e = evaluate(&ds.poses()[..2], g).unwrap_err().to_string();
     assert!(e.contains("(2 vs 1)"), "{e}");
 }
