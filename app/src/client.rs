@@ -174,6 +174,7 @@ fn on_worker_message(index: usize, m: FromWorker) {
         FromWorker::Failed { id, message } => finish(id, Err(message)),
         // Odometry runs have their own workers (see `run_vo`).
         FromWorker::VoStep { .. } | FromWorker::VoDone { .. } | FromWorker::Detected { .. } => {}
+        FromWorker::VoMetrics { .. } => {}
     }
 }
 
@@ -341,17 +342,49 @@ const VO_HELPERS: usize = 2;
 /// Starts the lab's odometry loop on `frames`; `on_event` gets every
 /// `VoStep`, then `VoDone` or `Failed`. A new run replaces the previous one.
 pub fn run_vo(frames: Vec<Vec<u8>>, poses: String, on_event: impl Fn(FromWorker) + 'static) -> Result<(), String> {
+    let start = ToWorker::VoStart { id: VO_ID, total: frames.len() as u32, poses };
+    start_vo(frames, start, VO_HELPERS, on_event)
+}
+
+/// [`run_vo`] with the student's matcher instead of LK (`vo::matched`): the
+/// tracking worker runs SIFT on every frame itself, so no helpers.
+pub fn run_vo_matched(
+    frames: Vec<Vec<u8>>,
+    poses: String,
+    strategy: siftlab_core::matching::Strategy,
+    on_event: impl Fn(FromWorker) + 'static,
+) -> Result<(), String> {
+    let start = ToWorker::VoMatchedStart {
+        id: VO_ID,
+        total: frames.len() as u32,
+        poses,
+        algo: strategy.name().into(),
+        threshold: strategy.threshold(),
+    };
+    start_vo(frames, start, 0, on_event)
+}
+
+fn start_vo(
+    frames: Vec<Vec<u8>>,
+    start_msg: ToWorker,
+    helpers: usize,
+    on_event: impl Fn(FromWorker) + 'static,
+) -> Result<(), String> {
     stop_vo();
     let script = POOL.with(|p| p.borrow().script.clone());
     let start = |role: Role| WorkerHandle::start(&script, move |m| on_vo_message(role, m), move || on_vo_crash(role));
     let mut tracker = start(Role::Tracker)?;
-    let helpers = (0..VO_HELPERS)
+    let helpers = (0..helpers)
         .map(|i| start(Role::Helper(i)).map(|handle| Helper { handle, busy: None, dead: false }))
         .collect::<Result<Vec<_>, _>>()?;
-    tracker.send(ToWorker::VoStart { id: VO_ID, total: frames.len() as u32, poses });
+    let matched = matches!(start_msg, ToWorker::VoMatchedStart { .. });
+    tracker.send(start_msg);
     let mut detected = vec![None; frames.len()];
-    if let Some(d) = detected.get_mut(1) {
-        *d = Some(None);
+    for (i, d) in detected.iter_mut().enumerate() {
+        // Frame 1 never re-detects; a matched run detects in the tracker.
+        if i == 1 || matched {
+            *d = Some(None);
+        }
     }
     let mut run = VoRun {
         tracker,
@@ -470,6 +503,7 @@ fn on_vo_message(role: Role, m: FromWorker) {
                 run.tracking = false;
                 Some(m)
             }
+            (Role::Tracker, FromWorker::VoMetrics { .. }) => Some(m),
             (_, FromWorker::VoDone { .. }) => {
                 run.over = true;
                 Some(m)

@@ -18,6 +18,7 @@ pub mod pylit;
 pub mod selfcheck;
 pub mod state;
 pub mod urlstate;
+pub mod vo_view;
 pub mod worker;
 
 pub use components::App;

@@ -25,6 +25,10 @@ pub enum ToWorker {
     /// The run's next frame, with its keypoints if a helper already detected
     /// them (`None` for frame 1, which never re-detects).
     VoFrame { id: u32, frame: u32, bytes: Vec<u8>, points: Option<Vec<[f32; 2]>> },
+    /// Starts a run of the loop driven by the student's matcher
+    /// (`vo::matched`) instead of LK; its frames come as `VoFrame`s without
+    /// points (the worker runs SIFT on each once).
+    VoMatchedStart { id: u32, total: u32, poses: String, algo: String, threshold: Option<f64> },
 }
 
 /// What SIFT produced for one frame, plus the gray image it ran on.
@@ -76,6 +80,12 @@ pub enum FromWorker {
         ate: f64,
         png: Vec<u8>,
         ms: f64,
+    },
+    /// Sent just before `VoDone`: the run's metrics
+    /// (`TrajectoryMetrics::to_array`, KITTI figures NaN when undefined).
+    VoMetrics {
+        id: u32,
+        metrics: [f64; 7],
     },
     /// The keypoint positions of a [`ToWorker::Detect`] frame.
     Detected {
@@ -175,6 +185,14 @@ impl ToWorker {
                 set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
                 set(&o, "points", &points.as_deref().map(points_js).unwrap_or(JsValue::NULL));
             }
+            ToWorker::VoMatchedStart { id, total, poses, algo, threshold } => {
+                set(&o, "type", &"voMatchedStart".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "total", &(*total).into());
+                set(&o, "poses", &poses.as_str().into());
+                set(&o, "algo", &algo.as_str().into());
+                set(&o, "threshold", &threshold.map_or(JsValue::NULL, JsValue::from));
+            }
         }
         o.into()
     }
@@ -195,6 +213,13 @@ impl ToWorker {
                 frame: get_u32(v, "frame")?,
                 bytes: get_bytes(v, "bytes")?,
                 points: get_points(v, "points")?,
+            }),
+            "voMatchedStart" => Ok(ToWorker::VoMatchedStart {
+                id: get_u32(v, "id")?,
+                total: get_u32(v, "total")?,
+                poses: get_str(v, "poses")?,
+                algo: get_str(v, "algo")?,
+                threshold: get(v, "threshold")?.as_f64(),
             }),
             other => Err(format!("unknown message type {other:?}")),
         }
@@ -235,6 +260,11 @@ impl FromWorker {
                 set(&o, "ate", &(*ate).into());
                 set(&o, "png", &Uint8Array::from(png.as_slice()).into());
                 set(&o, "ms", &(*ms).into());
+            }
+            FromWorker::VoMetrics { id, metrics } => {
+                set(&o, "type", &"voMetrics".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "metrics", &js_sys::Float64Array::from(metrics.as_slice()).into());
             }
             FromWorker::Detected { frame, points } => {
                 set(&o, "type", &"detected".into());
@@ -286,6 +316,15 @@ impl FromWorker {
                 png: get_bytes(v, "png")?,
                 ms: get_f64(v, "ms")?,
             }),
+            "voMetrics" => {
+                let a = get(v, "metrics")?
+                    .dyn_into::<js_sys::Float64Array>()
+                    .map_err(|_| "message field metrics is not a Float64Array".to_string())?
+                    .to_vec();
+                let metrics: [f64; 7] =
+                    a.try_into().map_err(|a: Vec<f64>| format!("voMetrics has {} numbers, not 7", a.len()))?;
+                Ok(FromWorker::VoMetrics { id: get_u32(v, "id")?, metrics })
+            }
             "detected" => Ok(FromWorker::Detected {
                 frame: get_u32(v, "frame")?,
                 points: get_points(v, "points")?.ok_or("detected without points")?,

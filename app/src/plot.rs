@@ -6,34 +6,6 @@ use siftlab_core::matching::Verdict;
 use siftlab_core::pyfmt::py_float;
 use siftlab_core::sift::KeyPoint;
 
-/// A square SVG view box `(x, y, size)` around the x/z coordinates of
-/// `points` (the lab's trajectory window: x to the right, z downwards), at
-/// least 1 m across, padded by 8 % on each side; non-finite points are left out.
-pub fn fit_xz(points: impl IntoIterator<Item = [f64; 3]>) -> (f64, f64, f64) {
-    let (mut x0, mut x1, mut z0, mut z1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-    for p in points {
-        if p[0].is_finite() && p[2].is_finite() {
-            x0 = x0.min(p[0]);
-            x1 = x1.max(p[0]);
-            z0 = z0.min(p[2]);
-            z1 = z1.max(p[2]);
-        }
-    }
-    let span = (x1 - x0).max(z1 - z0).max(1.0);
-    let pad = span * 0.08;
-    ((x0 + x1) / 2.0 - span / 2.0 - pad, (z0 + z1) / 2.0 - span / 2.0 - pad, span + 2.0 * pad)
-}
-
-/// An SVG polyline's `points` through the x/z coordinates (finite ones only).
-pub fn polyline_xz(points: impl IntoIterator<Item = [f64; 3]>) -> String {
-    points
-        .into_iter()
-        .filter(|p| p[0].is_finite() && p[2].is_finite())
-        .map(|p| format!("{:.3},{:.3}", p[0], p[2]))
-        .collect::<Vec<_>>()
-        .join(" ")
-}
-
 /// The odometry's live progress: `frame n / total`, with the rate so far
 /// while it runs (from two steps on).
 pub fn vo_progress_text(n: usize, total: u32, running: bool, elapsed_ms: f64) -> String {
@@ -203,20 +175,6 @@ mod tests {
 
     fn kp(x: f32, y: f32, size: f32, angle: f32) -> KeyPoint {
         KeyPoint { x, y, size, angle, response: 0.0, octave: 0 }
-    }
-
-    #[test]
-    fn the_trajectory_box_is_square_padded_and_skips_nan() {
-        let (x, z, s) = fit_xz([[0.0, 0.0, 0.0], [10.0, 5.0, 4.0], [f64::NAN, 0.0, 99.0]]);
-        assert!((s - 11.6).abs() < 1e-12, "{s}");
-        assert!((x - -0.8).abs() < 1e-12 && (z - (2.0 - 5.0 - 0.8)).abs() < 1e-12, "{x} {z}");
-        // A single point: 1 m across.
-        let (x, z, s) = fit_xz([[2.0, 0.0, 3.0]]);
-        assert!((x - 1.42).abs() < 1e-12 && (z - 2.42).abs() < 1e-12 && (s - 1.16).abs() < 1e-12, "{x} {z} {s}");
-        assert_eq!(
-            polyline_xz([[1.0, 9.0, 2.5], [f64::INFINITY, 0.0, 0.0], [-0.5, 0.0, 0.0]]),
-            "1.000,2.500 -0.500,0.000"
-        );
     }
 
     #[test]

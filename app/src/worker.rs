@@ -66,6 +66,17 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
                 post(FromWorker::Failed { id, message });
             }
         }
+        ToWorker::VoMatchedStart { id, total, poses, algo, threshold } => {
+            let started = siftlab_core::matching::Strategy::parse(&algo, threshold)
+                .map_err(|e| e.to_string())
+                .and_then(|s| VoSession::start(id, total as usize, &poses).map(|v| v.with_matcher(s)))
+                .and_then(|r| r);
+            let failed = started.as_ref().err().cloned();
+            SESSION.with(|s| *s.borrow_mut() = started.ok());
+            if let Some(message) = failed {
+                post(FromWorker::Failed { id, message });
+            }
+        }
         ToWorker::VoFrame { id, frame, bytes, points } => {
             let r = SESSION.with(|s| match s.borrow_mut().as_mut() {
                 Some(session) if session.id == id => session.frame(frame as usize, &bytes, points, post),
@@ -91,6 +102,10 @@ struct VoSession {
     total: usize,
     poses: Vec<siftlab_core::dataset::PoseRow>,
     odo: siftlab_core::vo::Odometry,
+    /// Set for a run driven by the student's matcher (`odo` then unused).
+    matched: Option<siftlab_core::vo::MatchedOdometry>,
+    /// Estimated poses as KITTI rows, for the metrics.
+    rows: Vec<siftlab_core::dataset::PoseRow>,
     est: Vec<[f64; 3]>,
     truth: Vec<[f64; 3]>,
     t0: f64,
@@ -111,7 +126,14 @@ impl VoSession {
             ));
         }
         let odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
-        Ok(VoSession { id, total, poses, odo, est: Vec::new(), truth: Vec::new(), t0 })
+        Ok(VoSession { id, total, poses, odo, matched: None, rows: Vec::new(), est: Vec::new(), truth: Vec::new(), t0 })
+    }
+
+    /// The same session tracking with `strategy`'s matches instead of LK.
+    fn with_matcher(mut self, strategy: siftlab_core::matching::Strategy) -> Result<Self, String> {
+        use siftlab_core::vo::{Camera, MatchedOdometry};
+        self.matched = Some(MatchedOdometry::new(Camera::default(), strategy).map_err(|e| e.to_string())?);
+        Ok(self)
     }
 
     /// Frame `i` (the next one): one step, posted; after the last, the
@@ -132,7 +154,12 @@ impl VoSession {
             return Err(format!("frame {i} arrived out of order (expected frame {})", self.est.len()));
         }
         let img = GrayImage::decode(bytes).map_err(|e| format!("frame {i}: {e}"))?;
-        let step = self.odo.step_detected(&img, self.poses.get(i), points).map_err(|e| e.to_string())?;
+        let step = match self.matched.as_mut() {
+            Some(m) => m.step(&img, self.poses.get(i)),
+            None => self.odo.step_detected(&img, self.poses.get(i), points),
+        }
+        .map_err(|e| e.to_string())?;
+        self.rows.push(siftlab_core::vo::pose_row(&step.rotation, &step.position));
         let gt = step.gt_position.or_else(|| self.poses.get(i).map(position));
         self.est.push(step.position);
         if let Some(g) = gt {
@@ -151,6 +178,9 @@ impl VoSession {
             let ate = ate_rmse(&self.est, &self.truth).map_err(|e| e.to_string())?;
             let style = TrajectoryStyle::default();
             let png = encode_png(&trajectory_window(&self.truth, &self.est, &style)).map_err(|e| e.to_string())?;
+            let gt = &self.poses[..self.rows.len()];
+            let metrics = siftlab_core::vo::evaluate(&self.rows, gt).map_err(|e| e.to_string())?;
+            post(FromWorker::VoMetrics { id: self.id, metrics: metrics.to_array() });
             post(FromWorker::VoDone { id: self.id, ate, png, ms: now_ms() - self.t0 });
         }
         Ok(())

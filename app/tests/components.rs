@@ -409,6 +409,10 @@ fn worker_messages_round_trip_bit_for_bit() {
 fn odometry_messages_round_trip_and_bad_poses_are_named() {
     let v = ToWorker::VoStart { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
     assert_eq!(ToWorker::from_js(&v.to_js()).unwrap(), v);
+    for threshold in [Some(0.8), None] {
+        let v = ToWorker::VoMatchedStart { id: 5, total: 2, poses: "p".into(), algo: "nndr".into(), threshold };
+        assert_eq!(ToWorker::from_js(&v.to_js()).unwrap(), v);
+    }
     for m in [
         FromWorker::VoStep {
             id: 5,
@@ -429,7 +433,14 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
             redetected: false,
         },
         FromWorker::VoDone { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5 },
+        FromWorker::VoMetrics { id: 5, metrics: [100.0, 1.1, 0.14, 0.13, 0.12, f64::NAN, f64::NAN] },
     ] {
+        let back = FromWorker::from_js(&m.to_js()).unwrap();
+        if let (FromWorker::VoMetrics { metrics: a, .. }, FromWorker::VoMetrics { metrics: b, .. }) = (&back, &m) {
+            // NaN (no KITTI segment) is not equal to itself: compare the bits.
+            assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
+            continue;
+        }
         assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
     }
     let run = |frames: Vec<Vec<u8>>, poses: &str| one_worker_odometry(1, frames, poses);
@@ -492,8 +503,9 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     };
     let one_worker: Vec<FromWorker> =
         one_worker_odometry(7, frames.clone(), poses).into_iter().map(without_time).collect();
-    assert_eq!(one_worker.len(), 5, "{one_worker:?}");
-    assert!(matches!(one_worker[4], FromWorker::VoDone { .. }));
+    assert_eq!(one_worker.len(), 6, "{one_worker:?}");
+    assert!(matches!(one_worker[4], FromWorker::VoMetrics { metrics, .. } if metrics[0] == 4.0));
+    assert!(matches!(one_worker[5], FromWorker::VoDone { .. }));
 
     assert!(handle(ToWorker::VoStart { id: 7, total: 4, poses: poses.into() }).is_empty());
     let mut streamed = Vec::new();

@@ -9,6 +9,8 @@ mod load;
 mod manual;
 mod result;
 mod trajectory;
+mod vo_compare;
+mod vo_plot;
 
 pub use check::{Exercises, SelfCheck};
 pub use controls::Controls;

@@ -2,16 +2,22 @@
 //! 0 … FRAME_ID (FRAME_ID + 1 frames, as the lab counts) of the demo or a
 //! MyKITTI folder, computed by the core in workers, drawn as it grows (truth
 //! green, estimate red, as in the lab's window), with the trajectory error and
-//! the lab's window as a PNG to download.
+//! the lab's window as a PNG to download. A menu swaps LK for the student's
+//! matcher (`vo::matched`); the metrics and the core's figures follow each run,
+//! and [`VoCompare`] runs all four trackers side by side.
 
+use super::vo_compare::VoCompare;
+use super::vo_plot::VoFigures;
 use crate::client;
 use crate::frameset::{run_from_zero, vo_frame_count, vo_range_label};
 use crate::loading;
 use crate::msg::FromWorker;
-use crate::plot::{fit_xz, percent, polyline_xz, vo_done_text, vo_progress_text};
+use crate::plot::{percent, vo_done_text, vo_progress_text};
 use crate::state::Lab;
+use crate::vo_view::{default_threshold, tracker_strategy, RunResult, TRACKERS};
 use leptos::prelude::*;
 use siftlab_core::render::coordinates_text;
+use siftlab_core::vo::TrajectoryMetrics;
 
 type P3 = [f64; 3];
 /// One plotted step: frame, estimate, ground truth.
@@ -48,6 +54,11 @@ pub fn TrajectoryView() -> impl IntoView {
     let error = RwSignal::new(None::<String>);
     let done = RwSignal::new(None::<Done>);
     let frame_url = RwSignal::new(None::<String>);
+    // The tracker: "lk" (the lab's) or a strategy with its threshold.
+    let tracker = RwSignal::new("lk".to_string());
+    let threshold = RwSignal::new(String::new());
+    let strategy_run = RwSignal::new(None::<siftlab_core::matching::Strategy>);
+    let metrics = RwSignal::new(None::<TrajectoryMetrics>);
     let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
     // When the workers got the frames: the live rate counts from there.
     let started_ms = StoredValue::new(0.0f64);
@@ -63,6 +74,15 @@ pub fn TrajectoryView() -> impl IntoView {
                 return;
             }
         };
+        let strategy = match tracker_strategy(&tracker.get_untracked(), &threshold.get_untracked()) {
+            Ok(s) => s,
+            Err(e) => {
+                error.set(Some(e));
+                return;
+            }
+        };
+        strategy_run.set(strategy);
+        metrics.set(None);
         error.set(None);
         if let Some(d) = done.get_untracked() {
             revoke(d.png_url);
@@ -83,13 +103,14 @@ pub fn TrajectoryView() -> impl IntoView {
             };
             frames.set_value(fr.clone());
             started_ms.set_value(crate::worker::now_ms());
-            let started = client::run_vo(fr, poses, move |m| match m {
+            let on_event = move |m| match m {
                 FromWorker::VoStep { frame, position, truth, .. } => {
                     steps.update(|s| s.push((frame, position, truth)));
                     let url = frames.with_value(|f| f.get(frame as usize).and_then(|b| blob_url(b)));
                     revoke(frame_url.get_untracked());
                     frame_url.set(url);
                 }
+                FromWorker::VoMetrics { metrics: m, .. } => metrics.set(Some(TrajectoryMetrics::from_array(&m))),
                 FromWorker::VoDone { ate, png, ms, .. } => {
                     done.set(Some(Done { ate, png_url: blob_url(&png), ms }));
                     running.set(false);
@@ -99,7 +120,11 @@ pub fn TrajectoryView() -> impl IntoView {
                     running.set(false);
                 }
                 _ => {}
-            });
+            };
+            let started = match strategy {
+                None => client::run_vo(fr, poses, on_event),
+                Some(s) => client::run_vo_matched(fr, poses, s, on_event),
+            };
             if let Err(e) = started {
                 error.set(Some(e));
                 running.set(false);
@@ -111,27 +136,14 @@ pub fn TrajectoryView() -> impl IntoView {
         running.set(false);
     };
 
-    let plot = move || {
-        let s = steps.get();
-        if s.is_empty() {
-            return None;
-        }
-        // The lab's window: x to the right, z (forward) downwards; fit all points.
-        let (vx, vz, vs) = fit_xz(s.iter().flat_map(|(_, e, t)| std::iter::once(*e).chain(*t)));
-        let est = polyline_xz(s.iter().map(|(_, e, _)| *e));
-        let gt = polyline_xz(s.iter().filter_map(|(_, _, t)| *t));
-        let last = s.last().map(|(_, e, _)| *e).unwrap_or([0.0; 3]);
-        let r = vs / 120.0;
-        Some(view! {
-            <svg class="traj-svg" viewBox=format!("{vx} {vz} {vs} {vs}") data-testid="vo-plot" role="img" aria-label="trajectory: truth green, estimate red">
-                <polyline points=gt class="traj-gt" stroke-width=r * 0.8/>
-                <polyline points=est class="traj-est" stroke-width=r * 0.8/>
-                <circle cx=last[0] cy=last[2] r=r * 1.6 class="traj-now"/>
-            </svg>
-            <p class="muted small">"x → right, z (forward) ↓ as in the lab's window; dot: the camera now"</p>
-            <p class="mono small" data-testid="vo-coordinates">{coordinates_text(&last)}</p>
-        })
-    };
+    let truth = Signal::derive(move || steps.with(|s| s.iter().filter_map(|(_, _, t)| *t).collect::<Vec<_>>()));
+    let runs = Signal::derive(move || {
+        let positions = steps.with(|s| s.iter().map(|(_, e, _)| *e).collect());
+        vec![RunResult { strategy: strategy_run.get(), positions, metrics: None, ms: 0.0 }.plot_run()]
+    });
+    let last = move || steps.with(|s| s.last().map(|(_, e, _)| *e).unwrap_or([0.0; 3]));
+    let count = Signal::derive(move || vo_frame_count(&frame_text.get(), available()));
+    let source = Signal::derive(move || lab.source.get());
 
     view! {
         <section class="card trajectory" aria-label="Visual odometry">
@@ -153,6 +165,23 @@ pub fn TrajectoryView() -> impl IntoView {
                         prop:value=move || frame_text.get()
                         on:input=move |ev| frame_text.set(event_target_value(&ev))/>
                 </label>
+                <label class="ctl">
+                    <span>"tracker"</span>
+                    <select data-testid="vo-tracker" on:change=move |ev| {
+                        let v = event_target_value(&ev);
+                        threshold.set(default_threshold(&v).to_string());
+                        tracker.set(v);
+                    }>
+                        {TRACKERS.map(|t| view! { <option value=t selected=move || tracker.get() == t>{if t == "lk" { "Lucas–Kanade (the lab's)".to_string() } else { format!("SIFT matching: {t}") }}</option> })}
+                    </select>
+                </label>
+                <Show when=move || tracker.get() != "lk">
+                    <label class="ctl">
+                        <span>"threshold"</span>
+                        <input class="num" data-testid="vo-threshold" prop:value=move || threshold.get()
+                            on:input=move |ev| threshold.set(event_target_value(&ev))/>
+                    </label>
+                </Show>
                 <button class="primary" data-testid="vo-run" on:click=run prop:disabled=move || running.get() || available() < 2>
                     "Run the odometry"
                 </button>
@@ -172,7 +201,10 @@ pub fn TrajectoryView() -> impl IntoView {
                     }}</span>
                 </div>
                 <div class="vo-views">
-                    <div class="vo-plot">{plot}</div>
+                    <div class="vo-plot">
+                        <VoFigures truth=truth runs=runs name="vo"/>
+                        <p class="mono small" data-testid="vo-coordinates">{move || coordinates_text(&last())}</p>
+                    </div>
                     <div class="vo-frame">
                         {move || frame_url.get().map(|u| view! { <img src=u alt="the current camera frame" class="vo-img"/> })}
                     </div>
@@ -186,6 +218,8 @@ pub fn TrajectoryView() -> impl IntoView {
                     {d.png_url.map(|u| view! { " · " <a href=u download="trajectory.png" data-testid="vo-download">"download trajectory.png"</a> })}
                 </p>
             })}
+            {move || metrics.get().map(|m| view! { <p class="small" data-testid="vo-metrics">{m.summary()}</p> })}
+            <VoCompare source=source count=count/>
         </section>
     }
 }

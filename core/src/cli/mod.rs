@@ -74,6 +74,22 @@ pub struct TrajectoryArgs {
     /// Where to write the plot.
     #[arg(long = "output", default_value = "trajectory.png")]
     pub output: PathBuf,
+    /// Track with the student's matcher (SIFT matching of consecutive frames)
+    /// instead of Lucas-Kanade.
+    #[arg(short = 'a', long = "algorithm", value_parser = ["dt", "nn", "nndr"])]
+    pub algo: Option<String>,
+    /// The matcher's threshold: a distance for dt/nn, a ratio in [0, 1] for nndr.
+    #[arg(short = 't', long = "threshold", requires = "algo", allow_negative_numbers = true)]
+    pub threshold: Option<String>,
+    /// Also write the estimated poses in TUM format (for evo): i/10 x y z qx qy qz qw.
+    #[arg(long = "save-poses-tum")]
+    pub save_poses_tum: Option<PathBuf>,
+    /// Write ATE (raw and aligned), RPE and the KITTI metric as JSON.
+    #[arg(long = "metrics")]
+    pub metrics: Option<PathBuf>,
+    /// Write the trajectory and error plot with axes (.png or .svg).
+    #[arg(long = "plot")]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -145,10 +161,14 @@ pub fn run(cli: &Cli) -> Result<()> {
                 None => None,
                 Some(s) => Some(parse_index(s, "FRAME_ID")?),
             };
+            let threshold = parse_threshold(&a.threshold)?;
+            let strategy = a.algo.as_deref().map(|algo| Strategy::parse(algo, threshold)).transpose()?;
             // The lab's three stdout lines; progress and siftlab's own summary
             // go to stderr, so stdout compares with the lab's as it is.
             let args = last.map_or(String::new(), |l| format!("{l},"));
-            println!("vo params: (None, None, {})", py_str(&cli.dataset));
+            let algo = a.algo.as_deref().map_or("None".to_string(), py_str);
+            let t_repr = threshold.map_or("None".to_string(), py_float);
+            println!("vo params: ({algo}, {t_repr}, {})", py_str(&cli.dataset));
             println!("debug run: view_trajectory({args})");
             let _ = std::io::stdout().flush();
             let root = expand_home(&cli.dataset);
@@ -169,11 +189,19 @@ pub fn run(cli: &Cli) -> Result<()> {
                 }
             };
             let frames = last.map(|l| l + 1);
-            let result = trajectory::view_trajectory(&root, frames, a.save_poses.as_deref(), &a.output, &mut progress);
+            let opts = trajectory::Options {
+                frames,
+                strategy,
+                save_poses: a.save_poses.as_deref(),
+                save_poses_tum: a.save_poses_tum.as_deref(),
+                metrics: a.metrics.as_deref(),
+                plot: a.plot.as_deref(),
+            };
+            let result = trajectory::view_trajectory(&root, &opts, &a.output, &mut progress);
             if open && result.is_err() {
                 eprintln!();
             }
-            eprintln!("{}", result?);
+            eprintln!("{}", result?.0);
             println!("ret value: None");
             Ok(())
         }

@@ -1,49 +1,105 @@
-//! `siftlab [-d DATASET] view_trajectory [FRAME_ID] [--save-poses FILE]`: the
-//! lab's visual odometry over frames 0..=FRAME_ID of a MyKITTI folder, the plot
-//! `trajectory.png` (truth green, estimate red) and the final position with
-//! the trajectory error.
+//! `siftlab [-d DATASET] view_trajectory [-a ALGO [-t T]] [FRAME_ID] [--save-poses FILE]
+//! [--save-poses-tum FILE] [--metrics FILE] [--plot FILE]`: the lab's visual odometry over
+//! frames 0..=FRAME_ID of a MyKITTI folder (Lucas–Kanade, or with `-a` the
+//! student's matcher: `vo::matched`), the lab's window `trajectory.png` (truth
+//! green, estimate red), the final position with the trajectory error, and on
+//! request the poses, the metrics as JSON and a plot with axes (PNG or SVG).
 
 use crate::dataset::Dataset;
 use crate::error::{Error, Result};
-use crate::vo::metrics::ate_rmse;
+use crate::matching::Strategy;
+use crate::render::plot::figures::{report_figure, run_style, Run};
+use crate::render::plot::{raster::rasterize, svg::to_svg};
+use crate::vo::export::{kitti_text, tum_text};
+use crate::vo::matched::{run_matched, MatchedOdometry};
+use crate::vo::metrics::{ate_rmse, evaluate, TrajectoryMetrics};
 use crate::vo::odometry::{pose_row, run};
-use crate::vo::{Camera, Odometry};
+use crate::vo::{Camera, Odometry, StepResult};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// Runs the VO on the first `frames` frames, 0..frames (the CLI passes
-/// FRAME_ID + 1; default: every frame of the dataset), writes `out_png` and, if asked, the estimated poses (KITTI
-/// format, one line per frame from 0: accumulated R and the drawn position).
-/// Returns the text to print.
+/// What `view_trajectory` runs and writes.
+#[derive(Clone, Debug, Default)]
+pub struct Options<'a> {
+    /// Frames 0..frames (the CLI passes FRAME_ID + 1; default: every frame
+    /// of the dataset with a pose).
+    pub frames: Option<usize>,
+    /// `None`: the lab's Lucas–Kanade tracking; else matching with this strategy.
+    pub strategy: Option<Strategy>,
+    /// KITTI format, one line per frame from 0: accumulated R and the drawn position.
+    pub save_poses: Option<&'a Path>,
+    /// TUM format (`evo`): `i/10 x y z qx qy qz qw`.
+    pub save_poses_tum: Option<&'a Path>,
+    /// The metrics as one JSON object.
+    pub metrics: Option<&'a Path>,
+    /// The trajectory and error plot, PNG or SVG by extension.
+    pub plot: Option<&'a Path>,
+}
+
+fn write(path: &Path, bytes: &[u8], what: &str) -> Result<()> {
+    std::fs::write(path, bytes).map_err(|e| Error::Dataset(format!("cannot write {what} to {}: {e}", path.display())))
+}
+
+/// Checks the plot's file name before the run, so a typo does not cost the run.
+fn plot_format(path: &Path) -> Result<bool> {
+    match path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase).as_deref() {
+        Some("png") => Ok(false),
+        Some("svg") => Ok(true),
+        _ => Err(Error::InvalidArgument(format!(
+            "--plot {}: the file name must end in .png or .svg (the format is taken from it)",
+            path.display()
+        ))),
+    }
+}
+
+/// Runs the VO on the first frames, writes `out_png` (the lab's window) and
+/// whatever `opts` asks for. Returns the text to print (on stderr) and the metrics.
 pub fn view_trajectory(
     dataset: &Path,
-    frames: Option<usize>,
-    save_poses: Option<&Path>,
+    opts: &Options,
     out_png: &Path,
     progress: &mut dyn FnMut(usize, usize),
-) -> Result<String> {
+) -> Result<(String, TrajectoryMetrics)> {
+    let svg = opts.plot.map(plot_format).transpose()?;
     let ds = Dataset::open(dataset)?;
-    let n = frames.unwrap_or(ds.frame_count().min(ds.poses().len()));
+    let n = opts.frames.unwrap_or(ds.frame_count().min(ds.poses().len()));
     if n == 0 {
         return Err(Error::InvalidArgument("the trajectory needs at least one frame (frame 0)".into()));
     }
     ds.check_frames(n)?;
-    let mut odo = Odometry::new(Camera::default())?;
-    let steps = run(&mut odo, n, ds.poses(), |i| ds.load_frame(i), progress)?;
+    let steps: Vec<StepResult> = match &opts.strategy {
+        None => {
+            let mut odo = Odometry::new(Camera::default())?;
+            run(&mut odo, n, ds.poses(), |i| ds.load_frame(i), progress)?
+        }
+        Some(s) => {
+            let mut odo = MatchedOdometry::new(Camera::default(), *s)?;
+            run_matched(&mut odo, n, ds.poses(), |i| ds.load_frame(i), progress)?
+        }
+    };
 
     let est: Vec<[f64; 3]> = steps.iter().map(|s| s.position).collect();
     let gt: Vec<[f64; 3]> = ds.poses()[..n].iter().map(crate::dataset::position).collect();
     let ate = ate_rmse(&est, &gt)?;
+    let poses: Vec<_> = steps.iter().map(|s| (s.rotation, s.position)).collect();
+    let rows: Vec<_> = poses.iter().map(|(r, t)| pose_row(r, t)).collect();
+    let metrics = evaluate(&rows, &ds.poses()[..n])?;
 
-    if let Some(path) = save_poses {
-        let mut text = String::new();
-        for s in &steps {
-            let row = pose_row(&s.rotation, &s.position);
-            let line: Vec<String> = row.iter().map(|v| crate::pyfmt::py_float(*v)).collect();
-            let _ = writeln!(text, "{}", line.join(" "));
-        }
-        std::fs::write(path, text)
-            .map_err(|e| Error::Dataset(format!("cannot write the poses to {}: {e}", path.display())))?;
+    if let Some(path) = opts.save_poses {
+        write(path, kitti_text(&poses).as_bytes(), "the poses")?;
+    }
+    if let Some(path) = opts.save_poses_tum {
+        write(path, tum_text(&poses).as_bytes(), "the TUM poses")?;
+    }
+    if let Some(path) = opts.metrics {
+        write(path, (metrics.to_json() + "\n").as_bytes(), "the metrics")?;
+    }
+    if let (Some(path), Some(svg)) = (opts.plot, svg) {
+        let (name, color) = run_style(opts.strategy.as_ref());
+        let scene = report_figure(&gt, &[Run { name, color, positions: est.clone() }], 720);
+        let bytes =
+            if svg { to_svg(&scene, None).into_bytes() } else { crate::render::encode_png(&rasterize(&scene))? };
+        write(path, &bytes, "the plot")?;
     }
 
     write_png(out_png, &est, &gt)?;
@@ -56,8 +112,9 @@ pub fn view_trajectory(
         "final position: x={:.4} y={:.4} z={:.4} (ground truth {:.4} {:.4} {:.4})",
         p[0], p[1], p[2], g[0], g[1], g[2]
     );
-    let _ = write!(out, "trajectory error (ATE RMSE, {n} frames): {ate:.4} m");
-    Ok(out)
+    let _ = writeln!(out, "trajectory error (ATE RMSE, {n} frames): {ate:.4} m");
+    let _ = write!(out, "{} ({n} frames): {}", run_style(opts.strategy.as_ref()).0, metrics.summary());
+    Ok((out, metrics))
 }
 
 /// The lab's window after the last frame (truth green, estimate red, the
@@ -86,7 +143,9 @@ mod tests {
     fn runs_the_lab_loop_and_writes_poses_and_png() {
         let (poses, png) = (tmp("poses.txt"), tmp("trajectory.png"));
         let mut calls = Vec::new();
-        let text = view_trajectory(&fixture(), Some(3), Some(&poses), &png, &mut |d, t| calls.push((d, t))).unwrap();
+        let opts = Options { frames: Some(3), save_poses: Some(&poses), ..Options::default() };
+        let (text, m) = view_trajectory(&fixture(), &opts, &png, &mut |d, t| calls.push((d, t))).unwrap();
+        assert_eq!((m.frames, m.kitti_t_err_pct), (3, None));
         assert_eq!(calls, vec![(1, 3), (2, 3), (3, 3)]);
         // tests/scripts/vo_reference.py --dataset www/demo/MyKITTI --frames 3
         // (OpenCV 4.8.0.76): position after frame 2.
@@ -128,12 +187,19 @@ mod tests {
     fn bad_arguments_and_datasets_are_explained() {
         let png = tmp("never.png");
         let mut nop = |_: usize, _: usize| {};
-        let e = view_trajectory(&fixture(), Some(0), None, &png, &mut nop).unwrap_err().to_string();
+        let frames = |n| Options { frames: Some(n), ..Options::default() };
+        let e = view_trajectory(&fixture(), &frames(0), &png, &mut nop).unwrap_err().to_string();
         assert!(e.contains("at least one frame"), "{e}");
-        let e = view_trajectory(&fixture(), Some(101), None, &png, &mut nop).unwrap_err().to_string();
+        let e = view_trajectory(&fixture(), &frames(101), &png, &mut nop).unwrap_err().to_string();
         assert!(e.contains("frames 0 to 100 are needed but") && e.contains("has frames 0 to 99 only"), "{e}");
-        let e = view_trajectory(Path::new("/nonexistent/MyKITTI"), None, None, &png, &mut nop).unwrap_err().to_string();
+        let e = view_trajectory(Path::new("/nonexistent/MyKITTI"), &Options::default(), &png, &mut nop)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("dataset folder /nonexistent/MyKITTI does not exist"), "{e}");
+        let plot = Path::new("plot.jpg");
+        let bad = Options { plot: Some(plot), ..Options::default() };
+        let e = view_trajectory(&fixture(), &bad, &png, &mut nop).unwrap_err().to_string();
+        assert!(e.contains("--plot plot.jpg: the file name must end in .png or .svg"), "{e}");
         assert!(!png.exists());
     }
 }

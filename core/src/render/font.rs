@@ -122,6 +122,13 @@ pub fn glyph(c: char) -> [u8; 7] {
     }
 }
 
+/// Width and height in pixels of `text` drawn at `scale` (no trailing gap).
+pub fn text_size(text: &str, scale: u32) -> (u32, u32) {
+    let n = text.chars().count() as u32;
+    let w = if n == 0 { 0 } else { (n * ADVANCE - (ADVANCE - GLYPH_W)) * scale };
+    (w, GLYPH_H * scale)
+}
+
 /// Draws `text` with its bottom-left corner on (`x`, `baseline`) like
 /// `cv2.putText`'s `org`: glyph rows occupy `baseline - 7*scale ..
 /// baseline - 1`. Pixels outside the image are skipped.
@@ -174,6 +181,9 @@ mod tests {
         draw_text(&mut a, "m=", 0, 10, 1, Rgb([9, 9, 9]));
         draw_text(&mut b, "m=", 0, 20, 2, Rgb([9, 9, 9]));
         assert_eq!(lit(&b).len(), 4 * lit(&a).len());
+        assert_eq!(text_size("m=", 1), (11, 7));
+        assert_eq!(text_size("m=", 2), (22, 14));
+        assert_eq!(text_size("", 1), (0, 7));
     }
 
     #[test]

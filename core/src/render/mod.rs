@@ -20,6 +20,8 @@ pub(crate) mod draw;
 pub(crate) mod font;
 pub(crate) mod info;
 pub(crate) mod matches;
+// The VO figures (axes, SVG, raster) the CLI and the app share: an API of its own.
+pub mod plot;
 pub(crate) mod trajectory;
 
 use crate::error::{Error, Result};

@@ -2,7 +2,8 @@
 //! it (`docs/fidelity.md` §VO-1 to §VO-7): [`lk`] tracks points
 //! (`calcOpticalFlowPyrLK`), [`ransac`] estimates the essential matrix with the
 //! [`five_point`] kernel (`findEssentialMat`), [`recover_pose`](fn@recover_pose) picks R, t
-//! (`recoverPose`), [`odometry`] is the lab's accumulation loop, [`metrics`]
+//! (`recoverPose`), [`odometry`] is the lab's accumulation loop, [`matched`]
+//! the same loop driven by the student's matcher instead of LK, [`metrics`]
 //! scores a trajectory against ground truth. [`linalg`] holds the numeric
 //! routines they share (OpenCV's Jacobi SVD, LU inverse, `solvePoly`, `cv::RNG`).
 
@@ -10,9 +11,11 @@
 // holds, also inside `unsafe fn`s.
 
 mod camera;
+pub(crate) mod export;
 pub(crate) mod five_point;
 pub(crate) mod linalg;
 pub(crate) mod lk;
+pub(crate) mod matched;
 pub(crate) mod metrics;
 pub(crate) mod odometry;
 pub(crate) mod ransac;
@@ -21,9 +24,11 @@ pub(crate) mod recover_pose;
 mod testing;
 
 pub use camera::Camera;
+pub use export::{kitti_text, tum_text};
 pub use linalg::{det3, mat_mul, mat_vec, skew, transpose, Mat3, Vec3, IDENTITY};
 pub use lk::{calc_optical_flow_pyr_lk, LkParams, LkResult};
-pub use metrics::{ate_rmse, max_median, position_differences};
+pub use matched::{matched_points, run_matched, MatchedOdometry};
+pub use metrics::{ate_rmse, evaluate, max_median, position_differences, TrajectoryMetrics};
 pub use odometry::{pose_row, run, sift_detector, Odometry, StepResult, Steps};
 pub use ransac::{find_essential_mat, EssentialResult, RansacParams};
 pub use recover_pose::{recover_pose, Pose};
