@@ -22,6 +22,7 @@ pub mod font;
 pub mod info;
 pub mod matches;
 pub mod trajectory;
+pub mod whole_frame;
 
 use crate::error::{Error, Result};
 pub use image::RgbImage;

@@ -286,3 +286,69 @@ fn unscaled(src: &RefinedPoint) -> Refined {
     };
     Refined { kp, o: src.o, layer: src.layer, r: src.r, c: src.c }
 }
+
+/// A pyramid level as 8-bit gray for display: Gaussian levels are already
+/// 0..255 (rounded and clamped); a DoG level is centred on 128 and scaled by
+/// its largest |value|, so its sign stays visible.
+pub fn level_to_gray(plane: &Plane, dog: bool) -> Vec<u8> {
+    if !dog {
+        return plane.data.iter().map(|&v| v.round().clamp(0.0, 255.0) as u8).collect();
+    }
+    let peak = plane.data.iter().fold(0f32, |m, v| m.max(v.abs()));
+    let k = if peak > 0.0 { 127.0 / peak } else { 0.0 };
+    plane.data.iter().map(|&v| (128.0 + v * k).round().clamp(0.0, 255.0) as u8).collect()
+}
+
+/// Every `step`-th pixel of every `step`-th row: a thumbnail whose values
+/// are the level's own (so the value under the cursor is exact there).
+pub fn subsample(plane: &Plane, step: usize) -> Plane {
+    let step = step.max(1);
+    let (w, h) = (plane.width.div_ceil(step), plane.height.div_ceil(step));
+    let mut out = Plane::for_overwrite(w, h);
+    for y in 0..h {
+        let src = plane.row(y * step);
+        for (x, d) in out.row_mut(y).iter_mut().enumerate() {
+            *d = src[x * step];
+        }
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn plane(w: usize, h: usize, f: impl Fn(usize, usize) -> f32) -> Plane {
+        let mut p = Plane::for_overwrite(w, h);
+        for y in 0..h {
+            for (x, v) in p.row_mut(y).iter_mut().enumerate() {
+                *v = f(x, y);
+            }
+        }
+        p
+    }
+
+    #[test]
+    fn gray_levels_round_and_dog_levels_keep_their_sign() {
+        let g = plane(3, 1, |x, _| [-3.0, 127.5, 300.0][x]);
+        assert_eq!(level_to_gray(&g, false), vec![0, 128, 255]);
+        let d = plane(3, 1, |x, _| [-2.0, 0.0, 1.0][x]);
+        assert_eq!(level_to_gray(&d, true), vec![1, 128, 192]);
+        assert_eq!(level_to_gray(&plane(2, 1, |_, _| 0.0), true), vec![128, 128]);
+    }
+
+    #[test]
+    fn subsample_keeps_exact_values() {
+        let p = plane(5, 3, |x, y| (10 * y + x) as f32);
+        let s = subsample(&p, 2);
+        assert_eq!((s.width, s.height), (3, 2));
+        assert_eq!(s.data, vec![0.0, 2.0, 4.0, 20.0, 22.0, 24.0]);
+    }
+
+    #[test]
+    fn empty_image_has_an_empty_funnel() {
+        let a = anatomy(&GrayImage::new(0, 0, Vec::new()).unwrap(), &SiftParams::default());
+        assert!(a.stages().iter().all(|s| s.count == 0));
+        assert_eq!((a.octaves, a.response_cutoff()), (0, None));
+    }
+}
