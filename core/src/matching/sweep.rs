@@ -36,25 +36,74 @@ pub struct Curve {
     pub kind: StrategyKind,
     /// Ascending.
     keys: Vec<f64>,
-    /// `correct[i]`: how many of the first `i` candidates are correct
-    /// (`keys.len() + 1` entries); `None` without ground truth.
+    /// Each candidate's (query, train) keypoint indices, in key order.
+    pairs: Vec<[u32; 2]>,
+    /// Whether each candidate is correct; `None` without ground truth.
+    ok: Option<Vec<bool>>,
+    /// `correct[i]`: how many of the first `i` candidates are correct.
     correct: Option<Vec<u32>>,
     /// Thresholds beyond this are outside what the table holds.
     max: f64,
 }
 
+/// A candidate before sorting: key, query, train, correct.
+type Candidate = (f64, u32, u32, bool);
+
 impl Curve {
-    fn new(kind: StrategyKind, mut cands: Vec<(f64, bool)>, truth: bool, max: f64) -> Curve {
+    fn new(kind: StrategyKind, mut cands: Vec<Candidate>, truth: bool, max: f64) -> Curve {
+        // Stable, so equal keys keep query (then train) order.
         cands.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let correct = truth.then(|| {
-            let mut c = Vec::with_capacity(cands.len() + 1);
+        let ok = truth.then(|| cands.iter().map(|c| c.3).collect());
+        let pairs = cands.iter().map(|c| [c.1, c.2]).collect();
+        Curve::assemble(kind, cands.into_iter().map(|c| c.0).collect(), pairs, ok, max)
+    }
+
+    fn assemble(kind: StrategyKind, keys: Vec<f64>, pairs: Vec<[u32; 2]>, ok: Option<Vec<bool>>, max: f64) -> Curve {
+        let correct = ok.as_ref().map(|ok: &Vec<bool>| {
+            let mut c = Vec::with_capacity(ok.len() + 1);
             c.push(0u32);
-            for (i, &(_, ok)) in cands.iter().enumerate() {
-                c.push(c[i] + ok as u32);
+            for (i, &b) in ok.iter().enumerate() {
+                c.push(c[i] + b as u32);
             }
             c
         });
-        Curve { kind, keys: cands.into_iter().map(|c| c.0).collect(), correct, max }
+        Curve { kind, keys, pairs, ok, correct, max }
+    }
+
+    /// The curve's data (keys ascending, pairs, verdicts, range limit), to
+    /// send it from a worker to the page.
+    pub fn parts(&self) -> (&[f64], &[[u32; 2]], Option<&[bool]>, f64) {
+        (&self.keys, &self.pairs, self.ok.as_deref(), self.max)
+    }
+
+    /// Rebuilds a curve from [`Curve::parts`]; errors if they do not fit.
+    pub fn from_parts(
+        kind: StrategyKind,
+        keys: Vec<f64>,
+        pairs: Vec<[u32; 2]>,
+        ok: Option<Vec<bool>>,
+        max: f64,
+    ) -> Result<Curve> {
+        let sorted = keys.windows(2).all(|w| w[0] <= w[1]);
+        if !sorted || pairs.len() != keys.len() || ok.as_ref().is_some_and(|o| o.len() != keys.len()) {
+            return Err(Error::InvalidArgument(format!(
+                "a {} sweep needs ascending keys and one pair (and verdict) per key",
+                kind.name()
+            )));
+        }
+        Ok(Curve::assemble(kind, keys, pairs, ok, max))
+    }
+
+    /// The matches the strategy gives at threshold `t`, (query, train) in
+    /// key order, with their verdicts (`None` past the range).
+    pub fn matches_at(&self, t: f64) -> Option<(&[[u32; 2]], Option<&[bool]>)> {
+        let m = self.at(t)?.matches;
+        Some((&self.pairs[..m], self.ok.as_ref().map(|o| &o[..m])))
+    }
+
+    /// Every candidate's matches (nn without a threshold).
+    pub fn all_matches(&self) -> (&[[u32; 2]], Option<&[bool]>) {
+        (&self.pairs, self.ok.as_deref())
     }
 
     /// The counts the strategy gives at threshold `t` (`None` past the
@@ -159,16 +208,17 @@ pub fn sweep(prev: &Features, cur: &Features, truth: Option<(&Matrix3<f64>, f64)
             let row = &rows[i * nt..(i + 1) * nt];
             for (t, &d) in row.iter().enumerate() {
                 if (d as f64) < DISTANCE_MAX {
-                    dt.push((d as f64, ok(q, t)));
+                    dt.push((d as f64, q as u32, t as u32, ok(q, t)));
                 }
             }
             let best = knn_row(q, row, 2);
             let (d1, d2) = (best[0].distance as f64, best[1].distance as f64);
-            let good = ok(q, best[0].train_idx);
-            nn.push((d1, good));
+            let j = best[0].train_idx;
+            let good = ok(q, j);
+            nn.push((d1, q as u32, j as u32, good));
             // d1 < t·d2 ⟺ d1/d2 < t (up to the rounding of the quotient); with
             // d2 = 0 no t passes.
-            nndr.push((if d2 > 0.0 { d1 / d2 } else { f64::INFINITY }, good));
+            nndr.push((if d2 > 0.0 { d1 / d2 } else { f64::INFINITY }, q as u32, j as u32, good));
         }
     }
     let truth = truth.is_some();
@@ -221,6 +271,22 @@ mod tests {
             check(Strategy::Nndr(t), s.nndr.at(t).unwrap());
         }
         let all = check(Strategy::Nn(None), s.nn.all());
+        // The matches themselves, not only their number: nndr 0.8's pairs
+        // are match_all's, and the parts rebuild the same curve.
+        let mut want: Vec<[u32; 2]> = match_all(&Strategy::Nndr(0.8), &prev, &cur)
+            .unwrap()
+            .into_iter()
+            .flatten()
+            .map(|m| [m.query_idx as u32, m.train_idx as u32])
+            .collect();
+        let mut got = s.nndr.matches_at(0.8).unwrap().0.to_vec();
+        (want.sort(), got.sort());
+        assert_eq!(got, want);
+        let (k, p, o, max) = s.dt.parts();
+        let back = Curve::from_parts(StrategyKind::Dt, k.to_vec(), p.to_vec(), o.map(<[bool]>::to_vec), max).unwrap();
+        assert_eq!(back, s.dt);
+        assert!(Curve::from_parts(StrategyKind::Dt, vec![2.0, 1.0], vec![[0, 0]; 2], None, max).is_err());
+        eprintln!("frames 10-11: {} dt candidates under {DISTANCE_MAX}", k.len());
         assert_eq!(all.matches, prev.keypoints.len());
         // The sample has counts rising with the threshold, and the dt table
         // refuses thresholds it cannot answer.
@@ -241,8 +307,9 @@ mod tests {
 
     #[test]
     fn crossings_find_sign_changes() {
-        let a = Curve::new(StrategyKind::Nn, vec![(1.0, true), (2.0, false), (3.0, false), (4.0, false)], true, 9.0);
-        let b = Curve::new(StrategyKind::Dt, vec![(1.0, false), (2.0, true), (3.0, true), (4.0, true)], true, 9.0);
+        let c = |v: [bool; 4]| (0..4).map(|i| (i as f64 + 1.0, i, i, v[i as usize])).collect::<Vec<_>>();
+        let a = Curve::new(StrategyKind::Nn, c([true, false, false, false]), true, 9.0);
+        let b = Curve::new(StrategyKind::Dt, c([false, true, true, true]), true, 9.0);
         // a: 1, 1/2, 1/3, 1/4; b: 0, 1/2, 2/3, 3/4 → equal at m = 2, b above from m = 3.
         assert_eq!(a.crossings(&b, 1), vec![(3, 1.0 / 3.0)]);
     }
