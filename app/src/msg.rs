@@ -25,6 +25,8 @@ pub enum ToWorker {
     /// The run's next frame, with its keypoints if a helper already detected
     /// them (`None` for frame 1, which never re-detects).
     VoFrame { id: u32, frame: u32, bytes: Vec<u8>, points: Option<Vec<[f32; 2]>> },
+    /// SIFT's anatomy or the whole-frame sweep (`msg_inside`).
+    Inside(crate::msg_inside::InsideRequest),
 }
 
 /// What SIFT produced for one frame, plus the gray image it ran on.
@@ -82,6 +84,8 @@ pub enum FromWorker {
         frame: u32,
         points: Vec<[f32; 2]>,
     },
+    /// The outcome of a [`ToWorker::Inside`] request.
+    Inside(crate::msg_inside::InsideReply),
 }
 
 fn set(o: &Object, k: &str, v: &JsValue) {
@@ -175,11 +179,15 @@ impl ToWorker {
                 set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
                 set(&o, "points", &points.as_deref().map(points_js).unwrap_or(JsValue::NULL));
             }
+            ToWorker::Inside(r) => return r.to_js(),
         }
         o.into()
     }
 
     pub fn from_js(v: &JsValue) -> Result<Self, String> {
+        if let Some(r) = crate::msg_inside::InsideRequest::from_js(v) {
+            return r.map(ToWorker::Inside);
+        }
         match kind(v)?.as_str() {
             "sift" => {
                 Ok(ToWorker::Sift { id: get_u32(v, "id")?, bytes: get_bytes(v, "bytes")?, lanes: get_u32(v, "lanes")? })
@@ -209,6 +217,7 @@ impl FromWorker {
         let o = Object::new();
         match self {
             FromWorker::Ready => set(&o, "type", &"ready".into()),
+            FromWorker::Inside(r) => return r.to_js(),
             FromWorker::Progress { id, stage } => {
                 set(&o, "type", &"progress".into());
                 set(&o, "id", &(*id).into());
@@ -267,6 +276,9 @@ impl FromWorker {
     }
 
     pub fn from_js(v: &JsValue) -> Result<Self, String> {
+        if let Some(r) = crate::msg_inside::InsideReply::from_js(v) {
+            return r.map(FromWorker::Inside);
+        }
         match kind(v)?.as_str() {
             "ready" => Ok(FromWorker::Ready),
             "progress" => Ok(FromWorker::Progress { id: get_u32(v, "id")?, stage: get_str(v, "stage")? }),

@@ -46,6 +46,13 @@ pub struct Curve {
     max: f64,
 }
 
+/// Matches of a curve: (query, train) keypoint indices in key order, and
+/// their verdicts when judged.
+pub type Selected<'a> = (&'a [[u32; 2]], Option<&'a [bool]>);
+
+/// A curve's data: ascending keys, pairs, verdicts, the largest threshold answered.
+pub type CurveParts<'a> = (&'a [f64], &'a [[u32; 2]], Option<&'a [bool]>, f64);
+
 /// A candidate before sorting: key, query, train, correct.
 type Candidate = (f64, u32, u32, bool);
 
@@ -72,7 +79,7 @@ impl Curve {
 
     /// The curve's data (keys ascending, pairs, verdicts, range limit), to
     /// send it from a worker to the page.
-    pub fn parts(&self) -> (&[f64], &[[u32; 2]], Option<&[bool]>, f64) {
+    pub fn parts(&self) -> CurveParts<'_> {
         (&self.keys, &self.pairs, self.ok.as_deref(), self.max)
     }
 
@@ -96,13 +103,13 @@ impl Curve {
 
     /// The matches the strategy gives at threshold `t`, (query, train) in
     /// key order, with their verdicts (`None` past the range).
-    pub fn matches_at(&self, t: f64) -> Option<(&[[u32; 2]], Option<&[bool]>)> {
+    pub fn matches_at(&self, t: f64) -> Option<Selected<'_>> {
         let m = self.at(t)?.matches;
         Some((&self.pairs[..m], self.ok.as_ref().map(|o| &o[..m])))
     }
 
     /// Every candidate's matches (nn without a threshold).
-    pub fn all_matches(&self) -> (&[[u32; 2]], Option<&[bool]>) {
+    pub fn all_matches(&self) -> Selected<'_> {
         (&self.pairs, self.ok.as_deref())
     }
 
@@ -280,7 +287,8 @@ mod tests {
             .map(|m| [m.query_idx as u32, m.train_idx as u32])
             .collect();
         let mut got = s.nndr.matches_at(0.8).unwrap().0.to_vec();
-        (want.sort(), got.sort());
+        want.sort();
+        got.sort();
         assert_eq!(got, want);
         let (k, p, o, max) = s.dt.parts();
         let back = Curve::from_parts(StrategyKind::Dt, k.to_vec(), p.to_vec(), o.map(<[bool]>::to_vec), max).unwrap();
