@@ -109,7 +109,7 @@ pub fn AnatomyView() -> impl IntoView {
                         .map(|(j, (n, c))| {
                             view! {
                                 <li data-drop=n.clone() data-count=*c>
-                                    <span class="sw" style=format!("background:{}", DROP_COLOURS[j % 4])></span>
+                                    <span class=format!("sw drop-{}", j % 4)></span>
                                     {format!(" − {c} {}", drop_label(n))}
                                 </li>
                             }

@@ -165,9 +165,9 @@ pub fn WholeFrameView() -> impl IntoView {
             {move || error.get().map(|e| view! { <p class="error" role="alert">{e}</p> })}
             {counts}
             <p class="muted legend">
-                <span class="sw" style="background:#28c83c"></span>" correct "
-                <span class="sw" style="background:#e62828"></span>" wrong "
-                <span class="sw" style="background:#3c8cff"></span>" not judged (no poses) · "
+                <span class="sw sw-correct"></span>" correct "
+                <span class="sw sw-wrong"></span>" wrong "
+                <span class="sw sw-unjudged"></span>" not judged (no poses) · "
                 "the strategy and threshold are the ones chosen above"
             </p>
             <div class="stage"><canvas node_ref=canvas_ref data-testid="wf-canvas"></canvas></div>
@@ -205,9 +205,9 @@ fn TradeoffChart(swept: RwSignal<Option<Swept>>) -> impl IntoView {
             .collect_view();
         let legend = CURVE_COLOURS
             .iter()
-            .map(|&(k, col)| {
+            .map(|&(k, _)| {
                 let (lo, hi) = siftlab_core::matching::sweep::range(k);
-                view! { <span><span class="sw" style=format!("background:{col}")></span>{format!(" {} ({lo}–{hi}) ", k.name())}</span> }
+                view! { <span><span class=format!("sw curve-{}", k.name())></span>{format!(" {} ({lo}–{hi}) ", k.name())}</span> }
             })
             .collect_view();
         let crossings = crossings_text(sweep);

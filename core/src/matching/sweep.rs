@@ -151,24 +151,35 @@ impl Curve {
 
     /// Where this curve and `other` cross in the (matches, precision) plane:
     /// the match counts m ≥ `from` at which the sign of their precision
-    /// difference changes, with the precision there.
+    /// difference changes, with the precision there. A change counts once
+    /// the new order holds by more than [`CROSSING_MARGIN`], so two curves
+    /// running together do not "cross" at every step; it is reported where
+    /// the difference first took the new sign.
     pub fn crossings(&self, other: &Curve, from: usize) -> Vec<(usize, f64)> {
         let n = self.keys.len().min(other.keys.len());
         let mut out = Vec::new();
-        let mut last = None;
+        let (mut last, mut since): (Option<bool>, Option<(usize, f64)>) = (None, None);
         for m in from.max(1)..=n {
             let (Some(a), Some(b)) = (self.precision_of_first(m), other.precision_of_first(m)) else { return out };
-            let s = (a - b).signum();
-            if a != b {
-                if last.is_some_and(|l: f64| l != s) {
-                    out.push((m, a));
+            let (above, clear) = (a > b, (a - b).abs() > CROSSING_MARGIN);
+            match last {
+                None if clear => last = Some(above),
+                Some(l) if l != above && a != b => {
+                    let start = *since.get_or_insert((m, a));
+                    if clear {
+                        out.push(start);
+                        (last, since) = (Some(above), None);
+                    }
                 }
-                last = Some(s);
+                _ => since = None,
             }
         }
         out
     }
 }
+
+/// How far apart (in precision) two curves must get for a crossing to count.
+pub const CROSSING_MARGIN: f64 = 0.005;
 
 /// The three curves of one pair.
 #[derive(Clone, Debug, PartialEq)]
@@ -320,5 +331,7 @@ mod tests {
         let b = Curve::new(StrategyKind::Dt, c([false, true, true, true]), true, 9.0);
         // a: 1, 1/2, 1/3, 1/4; b: 0, 1/2, 2/3, 3/4 → equal at m = 2, b above from m = 3.
         assert_eq!(a.crossings(&b, 1), vec![(3, 1.0 / 3.0)]);
+        // Curves that touch without changing order do not cross.
+        assert!(a.crossings(&a, 1).is_empty());
     }
 }
