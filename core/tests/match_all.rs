@@ -113,3 +113,35 @@ fn cli_anatomy_ends_at_sifts_keypoint_count() {
     assert_eq!(stages[4].get("count").and_then(Json::i64), Some(n));
     assert_eq!(json.get("octaves").and_then(Json::i64), Some(9));
 }
+
+/// The trade-off on the bundled pairs: where the three curves cross, and
+/// the precision each strategy reaches at its usual setting (printed for the
+/// docs; run with --nocapture). nndr's ratio test is the most precise at
+/// every pair, as Lowe found, and nn without a threshold the least.
+#[test]
+fn tradeoff_on_bundled_pairs() {
+    use siftlab_core::matching::strategy::StrategyKind;
+    let poses = parse_poses(&std::fs::read_to_string(kitti().join("poses/00.txt")).unwrap()).unwrap();
+    for frame in [1usize, 50, 120, 150] {
+        let (prev, cur) = (features(frame - 1), features(frame));
+        let f = fundamental(&poses[frame - 1], &poses[frame], &Camera::default()).unwrap();
+        let s = sweep(&prev, &cur, Some((&f, 2.0))).unwrap();
+        let p = |v: Verdicts| v.precision().unwrap();
+        let (nn, dt, nndr) = (p(s.nn.all()), p(s.dt.at(250.0).unwrap()), p(s.nndr.at(0.8).unwrap()));
+        assert!(nndr > nn && nndr > dt, "frame {frame}");
+        let k = StrategyKind::ALL;
+        let mut text = Vec::new();
+        for (i, &a) in k.iter().enumerate() {
+            for &b in &k[i + 1..] {
+                for (m, pr) in s.curve(a).crossings(s.curve(b), 20) {
+                    text.push(format!("{}x{} at {m} ({pr:.3})", a.name(), b.name()));
+                }
+            }
+        }
+        eprintln!(
+            "pair {}->{frame}: precision nn {nn:.4}, dt 250 {dt:.4}, nndr 0.8 {nndr:.4}; crossings: {}",
+            frame - 1,
+            text.join(", ")
+        );
+    }
+}

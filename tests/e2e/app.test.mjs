@@ -526,7 +526,7 @@ test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, 
     metrics.wholeFrame[`${algo} ${t || 'none'}`] = want;
     if (algo === 'nndr') {
       metrics.sweepStatus = (await page.textContent(tid('wf-status'))).trim();
-      await page.screenshot({ path: path.join(SHOTS, 'whole-frame.png'), fullPage: true });
+      await page.locator('.see-inside').screenshot({ path: path.join(SHOTS, 'whole-frame.png') });
     }
   }
   metrics.crossings120 = (await page.textContent(tid('crossings'))).trim();
@@ -547,6 +547,6 @@ test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, 
   assert.equal(await page.locator(`${tid('pyramid')} canvas.level`).count(), want.octaves * 11);
   await page.waitForSelector(tid('orientation-hist'));
   metrics.anatomyStatus = (await page.textContent(tid('anatomy-status'))).trim();
-  await page.screenshot({ path: path.join(SHOTS, 'anatomy.png'), fullPage: true });
+  await page.locator('.see-inside').screenshot({ path: path.join(SHOTS, 'anatomy.png') });
   fs.rmSync(tmp, { recursive: true });
 });
