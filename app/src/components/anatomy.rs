@@ -211,17 +211,17 @@ fn Pyramid(data: RwSignal<Option<Shown>>, enlarged: RwSignal<Option<usize>>, hov
     move || {
         let Shown(d, _) = data.get()?;
         let rows = (0..d.octaves)
-            .map(|o| {
+            .flat_map(|o| [(o, false), (o, true)])
+            .map(|(o, dog)| {
                 let cells = d
                     .levels
                     .iter()
                     .enumerate()
-                    .filter(|(_, l)| l.octave == o)
+                    .filter(|(_, l)| l.octave == o && l.dog == dog)
                     .map(|(i, l)| view! { <Level level=l.clone() index=i enlarged=enlarged hover=hover/> })
                     .collect_view();
-                view! {
-                    <div class="octave"><span class="muted">{format!("octave {}", o as i32 - 1)}</span>{cells}</div>
-                }
+                let label = format!("octave {} {}", o as i32 - 1, if dog { "DoG" } else { "Gaussian" });
+                view! { <div class="octave"><span class="muted">{label}</span>{cells}</div> }
             })
             .collect_view();
         Some(view! { <div class="pyramid" data-testid="pyramid">{rows}</div> })

@@ -24,8 +24,9 @@ use std::sync::Arc;
 /// has hundreds of thousands of candidates, which would paint the frames over.
 const MAX_LINES: usize = 20_000;
 
+/// The curves in the lab's order (their colours are the CSS classes `curve-dt` …).
 const CURVE_COLOURS: [(StrategyKind, &str); 3] =
-    [(StrategyKind::Dt, "#ff7ac6"), (StrategyKind::Nn, "#2f9bff"), (StrategyKind::Nndr, "#ffcc00")];
+    [(StrategyKind::Dt, "dt"), (StrategyKind::Nn, "nn"), (StrategyKind::Nndr, "nndr")];
 
 #[derive(Clone)]
 struct Swept(Arc<SweepData>, Frame, Frame);
@@ -189,7 +190,9 @@ fn TradeoffChart(swept: RwSignal<Option<Swept>>) -> impl IntoView {
         let xmax = chart_xmax(sweep);
         let curves = CURVE_COLOURS
             .iter()
-            .map(|&(k, col)| view! { <polyline points=chart_points(sweep.curve(k), xmax, w, h) stroke=col class="curve"/> })
+            .map(|&(k, _)| {
+                view! { <polyline points=chart_points(sweep.curve(k), xmax, w, h) class=format!("tcurve curve-{}", k.name())/> }
+            })
             .collect_view();
         let marker = current(sweep, lab.algo.get(), &lab.threshold()).ok().and_then(|(v, _)| {
             let p = v.precision()?;
@@ -219,9 +222,9 @@ fn TradeoffChart(swept: RwSignal<Option<Swept>>) -> impl IntoView {
                     <svg viewBox=format!("-40 -10 {} {}", w + 60.0, h + 40.0) class="chart">
                         <rect x=0 y=0 width=w height=h class="chart-bg"/>
                         <line x1=0 x2=w y1=chart_y(0.5, h) y2=chart_y(0.5, h) class="grid"/>
-                        <text x=-36 y=8 class="tick-label">"1.0"</text>
-                        <text x=-36 y=chart_y(0.5, h) + 4.0 class="tick-label">"0.5"</text>
-                        <text x=-36 y=h class="tick-label">"0"</text>
+                        <text x=-4 y=8 class="ylabel">"1.0"</text>
+                        <text x=-4 y=chart_y(0.5, h) + 4.0 class="ylabel">"0.5"</text>
+                        <text x=-4 y=h class="ylabel">"0"</text>
                         {ticks}
                         {curves}
                         {marker}
