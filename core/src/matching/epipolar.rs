@@ -53,11 +53,21 @@ pub fn fundamental(prev: &PoseRow, cur: &PoseRow, cam: &Camera) -> Result<Matrix
 /// The Sampson distance of x₂ (current frame) and x₁ (previous frame) to F:
 /// |x₂ᵀFx₁| / √((Fx₁)₁² + (Fx₁)₂² + (Fᵀx₂)₁² + (Fᵀx₂)₂²), in pixels.
 pub fn sampson(f: &Matrix3<f64>, x1: [f32; 2], x2: [f32; 2]) -> f64 {
-    let a = Vector3::new(x1[0] as f64, x1[1] as f64, 1.0);
-    let b = Vector3::new(x2[0] as f64, x2[1] as f64, 1.0);
-    let fa = f * a;
-    let ftb = f.transpose() * b;
-    let num = b.dot(&fa).abs();
+    let (a, b) = (homogeneous(x1), homogeneous(x2));
+    sampson_of(&(f * a), &(f.transpose() * b), &b)
+}
+
+/// A pixel as a homogeneous point.
+pub fn homogeneous(x: [f32; 2]) -> Vector3<f64> {
+    Vector3::new(x[0] as f64, x[1] as f64, 1.0)
+}
+
+/// The Sampson distance from its parts Fx₁, Fᵀx₂ and x₂: the sweep computes
+/// Fx₁ once per query and Fᵀx₂ once per train keypoint instead of once per
+/// pair, with the same operations, so the same bits as [`sampson`].
+#[inline]
+pub fn sampson_of(fa: &Vector3<f64>, ftb: &Vector3<f64>, b: &Vector3<f64>) -> f64 {
+    let num = b.dot(fa).abs();
     let den = (fa[0] * fa[0] + fa[1] * fa[1] + ftb[0] * ftb[0] + ftb[1] * ftb[1]).sqrt();
     num / den
 }
