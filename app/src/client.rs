@@ -52,7 +52,7 @@ pub fn content_key(bytes: &[u8], lanes: usize) -> u64 {
 /// it to say it is ready (nothing sent during its start-up is lost). The pool's
 /// SIFT workers and an odometry run's workers are all of this kind; dropping
 /// one terminates its worker.
-struct WorkerHandle {
+pub(crate) struct WorkerHandle {
     worker: web_sys::Worker,
     ready: bool,
     queue: Vec<JsValue>,
@@ -64,7 +64,7 @@ impl WorkerHandle {
     /// Starts a module worker running `script`: its messages, decoded, go to
     /// `on_message` (an undecodable one is logged); a failed start or a panic
     /// (wasm aborts, the instance is unusable) calls `on_crash`.
-    fn start(
+    pub(crate) fn start(
         script: &str,
         on_message: impl Fn(FromWorker) + 'static,
         on_crash: impl Fn() + 'static,
@@ -92,7 +92,7 @@ impl WorkerHandle {
     }
 
     /// Posts `m`, or queues it until the worker is ready.
-    fn send(&mut self, m: ToWorker) {
+    pub(crate) fn send(&mut self, m: ToWorker) {
         let m = m.to_js();
         if self.ready {
             let _ = self.worker.post_message(&m);
@@ -102,7 +102,7 @@ impl WorkerHandle {
     }
 
     /// The worker said `Ready`: what was queued goes out, in order.
-    fn set_ready(&mut self) {
+    pub(crate) fn set_ready(&mut self) {
         self.ready = true;
         for m in std::mem::take(&mut self.queue) {
             let _ = self.worker.post_message(&m);
@@ -173,8 +173,11 @@ fn on_worker_message(index: usize, m: FromWorker) {
         FromWorker::Done { id, result } => finish(id, Ok(result)),
         FromWorker::Failed { id, message } => finish(id, Err(message)),
         // Odometry runs have their own workers (see `run_vo`).
-        FromWorker::VoStep { .. } | FromWorker::VoDone { .. } | FromWorker::Detected { .. } => {}
-        FromWorker::VoMetrics { .. } => {}
+        FromWorker::VoStep { .. }
+        | FromWorker::VoDone { .. }
+        | FromWorker::Detected { .. }
+        | FromWorker::VoMetrics { .. }
+        | FromWorker::Inside(_) => {}
     }
 }
 
@@ -231,6 +234,11 @@ fn on_worker_crash(index: usize) {
 /// Where the worker script lives (tests point it elsewhere).
 pub fn set_worker_script(url: &str) {
     POOL.with(|p| p.borrow_mut().script = url.to_string());
+}
+
+/// The worker script's URL.
+pub(crate) fn worker_script() -> String {
+    POOL.with(|p| p.borrow().script.clone())
 }
 
 /// A frame already analysed with these exact bytes, if any.

@@ -329,3 +329,23 @@ pub async fn vo_inputs(source: &Source, n: u32) -> Result<(Vec<Vec<u8>>, String)
     };
     Ok((frames, poses))
 }
+
+/// The ground-truth poses of frames FRAME_ID-1 and FRAME_ID when the source
+/// has them (the demo, a folder with poses/00.txt); `None` for files picked
+/// one by one, which the whole-frame view then counts without judging.
+pub async fn pair_poses(source: &Source, frame_id: u32) -> Result<Option<[siftlab_core::dataset::PoseRow; 2]>, String> {
+    let text = match source {
+        Source::Demo(_) => fetch_text("demo/poses/00.txt").await?,
+        Source::Folder(_) => match FOLDER_POSES.with(|p| p.borrow().clone()) {
+            Some(file) => String::from_utf8(read_file(&file).await?).map_err(|_| "poses/00.txt is not text")?,
+            None => return Ok(None),
+        },
+        Source::Files => return Ok(None),
+    };
+    let poses = siftlab_core::dataset::parse_poses(&text).map_err(|e| format!("poses/00.txt: {e}"))?;
+    let i = frame_id as usize;
+    match (i.checked_sub(1).and_then(|p| poses.get(p)), poses.get(i)) {
+        (Some(a), Some(b)) => Ok(Some([*a, *b])),
+        _ => Err(format!("poses/00.txt has {} poses: frame {frame_id} has none", poses.len())),
+    }
+}

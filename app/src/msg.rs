@@ -29,6 +29,8 @@ pub enum ToWorker {
     /// (`vo::matched`) instead of LK; its frames come as `VoFrame`s without
     /// points (the worker runs SIFT on each once).
     VoMatchedStart { id: u32, total: u32, poses: String, algo: String, threshold: Option<f64> },
+    /// SIFT's anatomy or the whole-frame sweep (`msg_inside`).
+    Inside(crate::msg_inside::InsideRequest),
 }
 
 /// What SIFT produced for one frame, plus the gray image it ran on.
@@ -92,6 +94,8 @@ pub enum FromWorker {
         frame: u32,
         points: Vec<[f32; 2]>,
     },
+    /// The outcome of a [`ToWorker::Inside`] request.
+    Inside(crate::msg_inside::InsideReply),
 }
 
 fn set(o: &Object, k: &str, v: &JsValue) {
@@ -193,11 +197,15 @@ impl ToWorker {
                 set(&o, "algo", &algo.as_str().into());
                 set(&o, "threshold", &threshold.map_or(JsValue::NULL, JsValue::from));
             }
+            ToWorker::Inside(r) => return r.to_js(),
         }
         o.into()
     }
 
     pub fn from_js(v: &JsValue) -> Result<Self, String> {
+        if let Some(r) = crate::msg_inside::InsideRequest::from_js(v) {
+            return r.map(ToWorker::Inside);
+        }
         match kind(v)?.as_str() {
             "sift" => {
                 Ok(ToWorker::Sift { id: get_u32(v, "id")?, bytes: get_bytes(v, "bytes")?, lanes: get_u32(v, "lanes")? })
@@ -234,6 +242,7 @@ impl FromWorker {
         let o = Object::new();
         match self {
             FromWorker::Ready => set(&o, "type", &"ready".into()),
+            FromWorker::Inside(r) => return r.to_js(),
             FromWorker::Progress { id, stage } => {
                 set(&o, "type", &"progress".into());
                 set(&o, "id", &(*id).into());
@@ -297,6 +306,9 @@ impl FromWorker {
     }
 
     pub fn from_js(v: &JsValue) -> Result<Self, String> {
+        if let Some(r) = crate::msg_inside::InsideReply::from_js(v) {
+            return r.map(FromWorker::Inside);
+        }
         match kind(v)?.as_str() {
             "ready" => Ok(FromWorker::Ready),
             "progress" => Ok(FromWorker::Progress { id: get_u32(v, "id")?, stage: get_str(v, "stage")? }),

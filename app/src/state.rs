@@ -158,6 +158,8 @@ pub struct Lab {
     pub ex_seed: RwSignal<Option<u64>>,
     pub ex_q: RwSignal<u32>,
     pub analysis: Memo<Option<Result<Analysis, String>>>,
+    /// The "see inside" views' state.
+    pub inside: crate::seeinside::Inside,
 }
 
 /// Where a strategy's threshold text sits in [`Lab::thresholds`].
@@ -196,6 +198,7 @@ impl Lab {
             ex_seed: RwSignal::new(None),
             ex_q: RwSignal::new(1),
             analysis,
+            inside: crate::seeinside::Inside::new(),
         }
     }
 

@@ -27,6 +27,11 @@ pub struct UrlState {
     pub q: Option<u32>,
     /// OpenCV SIMD width to reproduce (absent = 8, AVX2).
     pub lanes: Option<u32>,
+    /// The open "see inside" view (`anatomy` or `matches`), its epipolar
+    /// threshold text (absent = 2 px) and the anatomy's selected keypoint.
+    pub see: Option<String>,
+    pub px: Option<String>,
+    pub kp: Option<usize>,
 }
 
 impl UrlState {
@@ -46,6 +51,9 @@ impl UrlState {
                 "ex" => st.ex = v.parse().ok(),
                 "q" => st.q = v.parse().ok(),
                 "lanes" => st.lanes = v.parse().ok(),
+                "see" => st.see = Some(v.to_string()),
+                "px" => st.px = Some(v.to_string()),
+                "kp" => st.kp = v.parse().ok(),
                 _ => {}
             }
         }
@@ -64,6 +72,9 @@ impl UrlState {
             num("ex", self.ex),
             num("q", self.q.map(u64::from)),
             num("lanes", self.lanes.map(u64::from)),
+            self.see.clone().map(|v| ("see", v)),
+            self.px.clone().map(|v| ("px", v)),
+            num("kp", self.kp.map(|k| k as u64)),
         ]
         .into_iter()
         .flatten()
@@ -113,12 +124,15 @@ mod tests {
             ex: Some(42),
             q: Some(3),
             lanes: Some(16),
+            see: Some("matches".into()),
+            px: Some("1.5".into()),
+            kp: Some(12),
         };
         let pairs = st.to_pairs();
         let keys: Vec<&str> = pairs.iter().map(|(k, _)| *k).collect();
-        assert_eq!(keys, ["src", "frame", "feature", "algo", "t", "ex", "q", "lanes"]);
+        assert_eq!(keys, ["src", "frame", "feature", "algo", "t", "ex", "q", "lanes", "see", "px", "kp"]);
         let values: Vec<&str> = pairs.iter().map(|(_, v)| v.as_str()).collect();
-        assert_eq!(values, ["demo", "1", "7", "nndr", "0.8", "42", "3", "16"]);
+        assert_eq!(values, ["demo", "1", "7", "nndr", "0.8", "42", "3", "16", "matches", "1.5", "12"]);
         assert_eq!(UrlState::from_pairs(pairs), st);
     }
 

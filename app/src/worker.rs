@@ -58,6 +58,7 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
             }
             Err(e) => post(FromWorker::Failed { id: frame, message: format!("frame {frame}: {e}") }),
         },
+        ToWorker::Inside(r) => crate::inside::handle(r, post),
         ToWorker::VoStart { id, total, poses } => {
             let started = VoSession::start(id, total as usize, &poses);
             let failed = started.as_ref().err().cloned();

@@ -516,3 +516,44 @@ fn blur_in_the_browser_equals_the_scalar_filter() {
     }
     assert_eq!(checked, 3 * (203 * 61 + 97 * 40 + 131 * 37 + 77 * 29));
 }
+
+/// SIFT's anatomy in the browser: the funnel's final list is the plain
+/// pipeline's keypoints bit for bit (frames 0, 1 and the manual's 120), and
+/// its time against plain SIFT's (the app's budget: at most 2x).
+#[wasm_bindgen_test]
+fn anatomy_in_the_browser_ends_in_the_pipelines_keypoints() {
+    use siftlab_core::sift::anatomy::anatomy;
+    let params = SiftParams::default();
+    let bits = |k: &[KeyPoint]| -> Vec<[u32; 6]> {
+        k.iter()
+            .map(|k| {
+                [
+                    k.x.to_bits(),
+                    k.y.to_bits(),
+                    k.size.to_bits(),
+                    k.angle.to_bits(),
+                    k.response.to_bits(),
+                    k.octave as u32,
+                ]
+            })
+            .collect()
+    };
+    for (name, bytes) in [("000000", FRAME0), ("000001", FRAME1), ("000120", MANUAL_FRAMES[1].1)] {
+        let img = GrayImage::decode(bytes).unwrap();
+        let t0 = performance_now();
+        let plain = detect_and_compute(&img, &params);
+        let t1 = performance_now();
+        let a = anatomy(&img, &params);
+        let t2 = performance_now();
+        let _ = a.histograms();
+        let t3 = performance_now();
+        let counts: Vec<usize> = a.stages().iter().map(|s| s.count).collect();
+        console_log!(
+            "anatomy {name}: stages {counts:?}; detect_and_compute {:.1} ms, anatomy {:.1} ms (+ histograms {:.1} ms)",
+            t1 - t0,
+            t2 - t1,
+            t3 - t2
+        );
+        assert_eq!(bits(&a.kept), bits(&plain.keypoints), "{name}");
+    }
+}

@@ -1,6 +1,8 @@
 //! The page, in the order of the lab's tasks: load frames, pick the strategy,
 //! look at the frames, read the result, follow the explanation, check yourself.
 
+mod anatomy;
+mod canvas2d;
 mod check;
 mod controls;
 mod explain;
@@ -8,9 +10,11 @@ mod frames;
 mod load;
 mod manual;
 mod result;
+mod see_inside;
 mod trajectory;
 mod vo_compare;
 mod vo_plot;
+mod whole_frame;
 
 pub use check::{Exercises, SelfCheck};
 pub use controls::Controls;
@@ -19,6 +23,7 @@ pub use frames::FramesView;
 pub use load::{Loader, Status};
 pub use manual::{apply_example, current_example, ManualComparison, ManualExamples};
 pub use result::ResultPanel;
+pub use see_inside::SeeInside;
 pub use trajectory::TrajectoryView;
 
 use crate::loading;
@@ -53,6 +58,7 @@ pub fn Explorer(lab: Lab) -> impl IntoView {
                     <Exercises/>
                 </div>
             </div>
+            <SeeInside/>
             <TrajectoryView/>
         </main>
         <footer>
@@ -98,6 +104,13 @@ pub fn apply_url(lab: Lab, st: &UrlState) {
     if let Some(l) = st.lanes.filter(|l| matches!(l, 8 | 16)) {
         lab.lanes.set(l as usize);
     }
+    if let Some(v) = st.see.as_deref().and_then(crate::seeinside::InsideView::parse) {
+        lab.inside.view.set(Some(v));
+    }
+    if let Some(px) = &st.px {
+        lab.inside.px.set(px.clone());
+    }
+    lab.inside.kp.set(st.kp);
     if let Some(seed) = st.ex {
         lab.ex_seed.set(Some(seed));
         lab.ex_q.set(st.q.unwrap_or(1).max(1));
@@ -131,6 +144,9 @@ pub fn url_state(lab: Lab) -> UrlState {
         ex: lab.ex_seed.get(),
         q: lab.ex_seed.get().map(|_| lab.ex_q.get()),
         lanes: Some(lab.lanes.get() as u32).filter(|&l| l != 8),
+        see: lab.inside.view.get().map(|v| v.name().to_string()),
+        px: Some(lab.inside.px.get()).filter(|p| p.trim() != "2"),
+        kp: lab.inside.kp.get(),
     }
 }
 

@@ -3,6 +3,8 @@
 //! Arguments are checked here with messages that say what to do; the work is
 //! done by the library.
 
+pub mod anatomy;
+pub mod match_all;
 pub mod trajectory;
 pub mod visual;
 
@@ -45,6 +47,23 @@ pub enum Command {
     ViewTrajectory(TrajectoryArgs),
     /// Run SIFT on one image: "N keypoints in T ms", or everything as JSON.
     Sift(SiftArgs),
+    /// SIFT's funnel on one image: points per stage, drops per reason; --out writes the pyramid.
+    Anatomy(AnatomyArgs),
+    /// Every match of frame FRAME_ID-1 into FRAME_ID, judged by the true geometry; writes matches.png.
+    #[command(name = "match_all")]
+    MatchAll(match_all::MatchAllArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct AnatomyArgs {
+    /// A PNG or JPEG image.
+    pub image: PathBuf,
+    /// Print the stages as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write every Gaussian and DoG level into this folder as PNG.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -206,6 +225,8 @@ pub fn run(cli: &Cli) -> Result<()> {
             Ok(())
         }
         Command::Sift(a) => run_sift(cli, a),
+        Command::Anatomy(a) => anatomy::run(&a.image, &sift_params(cli), a.json, a.out.as_deref()),
+        Command::MatchAll(a) => match_all::run(cli, a),
     }
 }
 

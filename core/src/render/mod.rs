@@ -23,12 +23,14 @@ pub(crate) mod matches;
 // The VO figures (axes, SVG, raster) the CLI and the app share: an API of its own.
 pub mod plot;
 pub(crate) mod trajectory;
+pub(crate) mod whole_frame;
 
 use crate::error::{Error, Result};
 pub use image::RgbImage;
 pub use info::draw as view_info;
 pub use matches::draw_feature as view_feature;
 pub use trajectory::{coordinates_text, draw as trajectory_window, Style as TrajectoryStyle};
+pub use whole_frame::draw as whole_frame;
 
 /// Encodes an RGB image as PNG bytes (what `cv2.imwrite` would write, minus
 /// the BGR order OpenCV keeps in memory). Works on wasm: no file system.

@@ -11,6 +11,10 @@
 //! 5. [`order`] — dedup, `retainBest` via libstdc++ introselect, rescale (§SIFT-10)
 //! 6. [`descriptor`] — 4×4×8 histograms, clipped, scaled to 0..255 (§SIFT-11)
 //!
+//! [`anatomy`] records what each stage kept and dropped (the app's "see
+//! inside" view) through an observer the pipeline takes; the plain path
+//! passes `()`, so it costs nothing there.
+//!
 //! The stages are built from [`blur`] (the bit-exact Gaussian kernel and
 //! separable filter, §SIFT-3) and [`num`] (the exact math kernels, §SIFT-12,
 //! and the FMA used throughout), and pass [`keypoint`]'s types; [`image`]
@@ -20,6 +24,8 @@
 //! algorithm in OpenCV's order and the dispatch; its x86 and wasm kernels
 //! live in `x86.rs` and `wasm.rs` beside it.
 
+// The pipeline observed stage by stage (the app's "see inside" view, `siftlab anatomy`).
+pub mod anatomy;
 pub(crate) mod blur;
 pub(crate) mod descriptor;
 pub(crate) mod extrema;

@@ -2,6 +2,7 @@
 //! OpenCV's order (docs/fidelity.md §SIFT-2 to §SIFT-11). No stage calls a
 //! later one; the driver wires each stage's output into the next.
 
+use super::anatomy::Observer;
 use super::image::Plane;
 use super::keypoint::{Features, KeyPoint};
 use super::params::SiftParams;
@@ -14,7 +15,7 @@ pub fn detect(img: &GrayImage, p: &SiftParams) -> Vec<KeyPoint> {
     if img.width() == 0 || img.height() == 0 {
         return Vec::new();
     }
-    find_keypoints(img, p, Pyramid::Drop).0
+    find_keypoints(img, p, Pyramid::Drop, &()).0
 }
 
 /// `detectAndCompute(img, None)`: keypoints in OpenCV's order and one
@@ -23,7 +24,7 @@ pub fn detect_and_compute(img: &GrayImage, p: &SiftParams) -> Features {
     if img.width() == 0 || img.height() == 0 {
         return Features::default();
     }
-    let (keypoints, gauss) = find_keypoints(img, p, Pyramid::Keep);
+    let (keypoints, gauss) = find_keypoints(img, p, Pyramid::Keep, &());
     let descriptors = descriptors(&gauss, &keypoints, p);
     Features { keypoints, descriptors }
 }
@@ -31,7 +32,7 @@ pub fn detect_and_compute(img: &GrayImage, p: &SiftParams) -> Features {
 /// Whether the caller needs the Gaussian pyramid after the keypoints are
 /// found (the descriptors read it).
 #[derive(Clone, Copy, PartialEq)]
-enum Pyramid {
+pub(super) enum Pyramid {
     Keep,
     Drop,
 }
@@ -50,7 +51,15 @@ const BAND: usize = 32;
 /// peak RSS of a 99-frame `view_trajectory` 140 → 114 MB. Otherwise the
 /// whole pyramid is built first and all octaves' scans share out over the
 /// threads at once. Same keypoints either way: §SIFT-10 sorts them all.
-fn find_keypoints(img: &GrayImage, p: &SiftParams, keep: Pyramid) -> (Vec<KeyPoint>, Vec<Plane>) {
+///
+/// `obs` sees each stage's output (the anatomy view's recorder); the plain
+/// path passes `&()`, whose empty methods the optimiser removes.
+pub(super) fn find_keypoints<O: Observer>(
+    img: &GrayImage,
+    p: &SiftParams,
+    keep: Pyramid,
+    obs: &O,
+) -> (Vec<KeyPoint>, Vec<Plane>) {
     let stream = keep == Pyramid::Drop && par::threads() == 1;
     let base = initial::initial_image(img, p.sigma);
     let octaves = pyramid::octave_count(base.width, base.height);
@@ -62,7 +71,7 @@ fn find_keypoints(img: &GrayImage, p: &SiftParams, keep: Pyramid) -> (Vec<KeyPoi
     for o in 0..octaves {
         let levels = pyramid::octave_levels(first, &sig);
         if stream {
-            scan(&[(o, &levels)], p, &mut kps);
+            scan(&[(o, &levels)], p, obs, &mut kps);
         }
         // Taken before `levels` goes back to the pool at the end of the loop
         // body (streaming), so the next octave's planes reuse this one's
@@ -76,16 +85,16 @@ fn find_keypoints(img: &GrayImage, p: &SiftParams, keep: Pyramid) -> (Vec<KeyPoi
     }
     if !stream {
         let all: Vec<(usize, &[Plane])> = gauss.chunks(per).enumerate().collect();
-        scan(&all, p, &mut kps);
+        scan(&all, p, obs, &mut kps);
     }
-    (in_opencv_order(kps, p), gauss)
+    (in_opencv_order(kps, p, obs), gauss)
 }
 
 /// The extremum scan of the given octaves (number, Gaussian levels) in row
 /// bands shared over the threads (§SIFT-6, §SIFT-7), each refined extremum
 /// handed to the orientation histogram (§SIFT-8), the keypoints appended to
 /// `out` (in whatever order the threads finish, §SIFT-9).
-fn scan(octaves: &[(usize, &[Plane])], p: &SiftParams, out: &mut Vec<KeyPoint>) {
+fn scan<O: Observer>(octaves: &[(usize, &[Plane])], p: &SiftParams, obs: &O, out: &mut Vec<KeyPoint>) {
     let jobs: Vec<(usize, usize)> = octaves
         .iter()
         .enumerate()
@@ -96,7 +105,10 @@ fn scan(octaves: &[(usize, &[Plane])], p: &SiftParams, out: &mut Vec<KeyPoint>) 
         |&(i, r0), out| {
             let (o, levels) = octaves[i];
             let mut orienter = orientation::Orienter::new(levels, p, out);
-            extrema::scan_octave(levels, o, r0..r0 + BAND, p, |refined| orienter.push(refined));
+            extrema::scan_octave(levels, o, r0..r0 + BAND, p, obs, |refined| {
+                obs.refined(&refined);
+                orienter.push(refined)
+            });
             orienter.finish();
         },
         out,
@@ -105,8 +117,10 @@ fn scan(octaves: &[(usize, &[Plane])], p: &SiftParams, out: &mut Vec<KeyPoint>) 
 
 /// §SIFT-10: duplicates removed from the sorted keypoints, the best `nfeatures`
 /// kept, first-octave coordinates halved.
-fn in_opencv_order(mut kps: Vec<KeyPoint>, p: &SiftParams) -> Vec<KeyPoint> {
+fn in_opencv_order<O: Observer>(mut kps: Vec<KeyPoint>, p: &SiftParams, obs: &O) -> Vec<KeyPoint> {
+    obs.oriented(&kps);
     order::remove_duplicated_sorted(&mut kps);
+    obs.deduplicated(&kps);
     if p.nfeatures > 0 {
         order::retain_best(&mut kps, p.nfeatures);
     }

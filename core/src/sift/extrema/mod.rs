@@ -8,6 +8,7 @@
 //! of the DoG rows and of the 26-neighbour test live beside it, in `x86.rs`
 //! (AVX2, AVX-512) and `wasm.rs` (SIMD128).
 
+use super::anatomy::Observer;
 use super::image::Plane;
 use super::keypoint::Refined;
 use super::params::SiftParams;
@@ -24,7 +25,9 @@ pub const IMG_BORDER: usize = 5;
 /// Finds the extrema of octave `o`, rows `[r0, r1)` of its DoG layers
 /// 1..=nl, and hands each refined one to `sink` (§SIFT-6: the scan order does
 /// not matter, §SIFT-10 sorts everything). `sink` is a generic closure, so
-/// it is compiled into the scan loop.
+/// it is compiled into the scan loop. `watch` sees every scan extremum and
+/// every rejection with its reason; the plain pipeline passes `&()`, whose
+/// empty methods compile away.
 ///
 /// OpenCV scans one stored DoG image at a time. The DoG rows come instead
 /// from a rolling window of three rows per DoG level, each row the f32
@@ -37,6 +40,7 @@ pub fn scan_octave(
     o: usize,
     rows: std::ops::Range<usize>,
     p: &SiftParams,
+    watch: &impl Observer,
     mut sink: impl FnMut(Refined),
 ) {
     let nl = p.n_octave_layers;
@@ -75,8 +79,10 @@ pub fn scan_octave(
             candidates.clear();
             row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates, &mut scratch);
             for &c in &candidates {
-                if let Some(refined) = refine::adjust_local_extremum(levels, o, layer, r, c, p) {
-                    sink(refined);
+                watch.extremum(o, layer, r, c);
+                match refine::adjust_local_extremum(levels, o, layer, r, c, p) {
+                    Ok(refined) => sink(refined),
+                    Err(why) => watch.rejected(o, layer, r, c, why),
                 }
             }
         }

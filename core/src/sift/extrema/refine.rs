@@ -7,6 +7,7 @@ use super::super::keypoint::{KeyPoint, Refined};
 use super::super::num::{fma, pow2f, rne, rne64};
 use super::super::params::SiftParams;
 use super::IMG_BORDER;
+use crate::sift::anatomy::Rejection;
 
 // §SIFT-1: at most five refinement steps; the image and derivative scales.
 const MAX_INTERP_STEPS: usize = 5;
@@ -104,7 +105,8 @@ fn solve_offsets(g: &Derivs) -> (f32, f32, f32) {
 }
 
 /// `adjustLocalExtrema`: up to five Newton steps, then the contrast and
-/// edge tests. `None` when OpenCV rejects the candidate.
+/// edge tests, or why OpenCV rejects the candidate (the plain pipeline
+/// ignores the reason; the anatomy view counts it).
 ///
 /// Compiled with FMA where the CPU has it: its two dozen `fma`s and
 /// roundings were calls to `fmaf` and `rintf` otherwise.
@@ -115,12 +117,19 @@ pub(super) fn adjust_local_extremum(
     r0: usize,
     c0: usize,
     p: &SiftParams,
-) -> Option<Refined> {
-    crate::with_hw_fma!(Option<Refined>, refine(levels, o, layer0, r0, c0, p))
+) -> Result<Refined, Rejection> {
+    crate::with_hw_fma!(Result<Refined, Rejection>, refine(levels, o, layer0, r0, c0, p))
 }
 
 #[inline(always)]
-fn refine(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &SiftParams) -> Option<Refined> {
+fn refine(
+    levels: &[Plane],
+    o: usize,
+    layer0: usize,
+    r0: usize,
+    c0: usize,
+    p: &SiftParams,
+) -> Result<Refined, Rejection> {
     let nl = p.n_octave_layers;
     let (w, h) = (levels[0].width as i64, levels[0].height as i64);
     let border = IMG_BORDER as i64;
@@ -137,17 +146,18 @@ fn refine(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &S
         }
         let lim = (i32::MAX / 3) as f32;
         if xi.abs() > lim || xr.abs() > lim || xc.abs() > lim {
-            return None;
+            // A step this large is a diverging solve: OpenCV's "no convergence".
+            return Err(Rejection::NoConvergence);
         }
         c += rne(xc) as i64;
         r += rne(xr) as i64;
         layer += rne(xi) as i64;
         if layer < 1 || layer > nl as i64 || c < border || c >= w - border || r < border || r >= h - border {
-            return None;
+            return Err(Rejection::LeftScaleSpace);
         }
     }
     if !converged {
-        return None;
+        return Err(Rejection::NoConvergence);
     }
     let (layer, r, c) = (layer as usize, r as usize, c as usize);
     let (cur, prev, next) = (dog(levels, layer), dog(levels, layer - 1), dog(levels, layer + 1));
@@ -156,7 +166,7 @@ fn refine(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &S
     let t = fma(d2, xi, fma(d1, xr, d0 * xc));
     let contr = fma(cur.at(r, c), IMG_SCALE, t * 0.5);
     if contr.abs() * (nl as f32) < (p.contrast_threshold as f32) {
-        return None;
+        return Err(Rejection::LowContrast);
     }
 
     let (dxx, dyy, dxy) = xy_second_derivs(cur, r, c);
@@ -164,7 +174,7 @@ fn refine(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &S
     let det = fma(dxx, dyy, -(dxy * dxy));
     let e = p.edge_threshold as f32;
     if det <= 0.0 || tr * tr * e >= (e + 1.0) * (e + 1.0) * det {
-        return None;
+        return Err(Rejection::EdgeLike);
     }
 
     let scale = (1u32 << o) as f32;
@@ -176,7 +186,7 @@ fn refine(levels: &[Plane], o: usize, layer0: usize, r0: usize, c0: usize, p: &S
         response: contr.abs(),
         angle: 0.0,
     };
-    Some(Refined { kp, o, layer, r, c })
+    Ok(Refined { kp, o, layer, r, c })
 }
 
 #[cfg(test)]

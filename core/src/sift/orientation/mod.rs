@@ -76,6 +76,15 @@ fn push_oriented(levels: &[Plane], refined: Refined, p: &SiftParams, out: &mut V
     let Refined { kp, r, c, .. } = refined;
     let (radius, sigma, lanes) = (rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
     let hist = crate::with_hw_fma!([f32; 36], orientation_hist(img, r, c, radius, sigma, lanes));
+    for_each_peak(&hist, |_, angle| out.push(KeyPoint { angle, ..kp }));
+}
+
+/// Calls `f(bin, angle)` for each smoothed-histogram peak that gets a
+/// keypoint: above both neighbours and at least 80 % of the highest bin,
+/// its bin refined by a parabola (§SIFT-8). Shared by the pipeline and the
+/// anatomy view, so both take the same peaks.
+#[inline(always)]
+fn for_each_peak(hist: &[f32; 36], mut f: impl FnMut(f32, f32)) {
     let omax = hist.iter().copied().fold(hist[0], f32::max);
     let mag_thr = omax * ORI_PEAK_RATIO;
     let n = ORI_HIST_BINS;
@@ -94,9 +103,39 @@ fn push_oriented(levels: &[Plane], refined: Refined, p: &SiftParams, out: &mut V
             if (angle - 360.0).abs() < FLT_EPSILON {
                 angle = 0.0;
             }
-            out.push(KeyPoint { angle, ..kp });
+            f(bin, angle);
         }
     }
+}
+
+/// One keypoint's orientation histogram as the anatomy view shows it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Histogram {
+    /// The 36 bins before smoothing.
+    pub raw: [f32; 36],
+    /// After OpenCV's [1 4 6 4 1]/16 smoothing: the bins the peaks are taken from.
+    pub smoothed: [f32; 36],
+    /// 80 % of the highest smoothed bin.
+    pub threshold: f32,
+    /// Each peak taken: its refined bin and the keypoint angle it gives.
+    pub peaks: Vec<(f32, f32)>,
+}
+
+/// The histogram the pipeline computes for `refined` (its octave's Gaussian
+/// `levels`), by the same code, raw and smoothed.
+pub fn histogram(levels: &[Plane], refined: &Refined, p: &SiftParams) -> Histogram {
+    let (scl, img) = scale_and_level(levels, refined);
+    let (radius, sigma, lanes) = (rne(ORI_RADIUS * scl), ORI_SIG_FCTR * scl, p.opencv_lanes);
+    let mut s = SCRATCH.with(|cell| cell.take());
+    let t = crate::with_hw_fma!([f32; 40], raw_hist_with(img, refined.r, refined.c, radius, sigma, lanes, &mut s));
+    SCRATCH.with(|cell| cell.set(s));
+    let smoothed = crate::with_hw_fma!([f32; 36], smooth(&t));
+    let mut raw = [0f32; 36];
+    raw.copy_from_slice(&t[2..38]);
+    let mut peaks = Vec::new();
+    for_each_peak(&smoothed, |bin, angle| peaks.push((bin, angle)));
+    let omax = smoothed.iter().copied().fold(smoothed[0], f32::max);
+    Histogram { raw, smoothed, threshold: omax * ORI_PEAK_RATIO, peaks }
 }
 
 /// The buffers of one histogram, kept per thread between calls: a KITTI
@@ -129,21 +168,15 @@ fn orientation_hist(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, la
     // Taken out and put back rather than borrowed in a closure: a closure
     // would be compiled apart from this FMA-enabled body.
     let mut s = SCRATCH.with(|cell| cell.take());
-    let h = orientation_hist_with(img, r, c, radius, sigma, lanes, &mut s);
+    let t = raw_hist_with(img, r, c, radius, sigma, lanes, &mut s);
     SCRATCH.with(|cell| cell.set(s));
-    h
+    smooth(&t)
 }
 
+/// The raw bins with their cyclic pads: `t[2..38]` holds bins 0..35,
+/// `t[0..2]` and `t[38..40]` copies of the bins across the wrap.
 #[inline(always)]
-fn orientation_hist_with(
-    img: &Plane,
-    r: usize,
-    c: usize,
-    radius: i32,
-    sigma: f32,
-    lanes: usize,
-    s: &mut Scratch,
-) -> [f32; 36] {
+fn raw_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes: usize, s: &mut Scratch) -> [f32; 40] {
     let expf_scale = -1.0 / ((2.0 * sigma) * sigma);
     let (rows, cols) = (img.height as i64, img.width as i64);
     let Scratch { dxs, dys, wts, w_args, weight_rows, oris, mags, offsets, prods } = s;
@@ -259,6 +292,12 @@ fn orientation_hist_with(
     t[1] = t[37];
     t[38] = t[2];
     t[39] = t[3];
+    t
+}
+
+/// OpenCV's [1 4 6 4 1]/16 smoothing of the padded raw bins.
+#[inline(always)]
+fn smooth(t: &[f32; 40]) -> [f32; 36] {
     let mut h = [0f32; 36];
     for (i, hi) in h.iter_mut().enumerate() {
         let a = t[i] + t[i + 4];

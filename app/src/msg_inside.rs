@@ -1,0 +1,335 @@
+//! The "see inside" messages between the page and a worker: SIFT's anatomy
+//! of one frame, and the whole-frame sweep of a pair. Like `msg.rs`, plain
+//! objects whose bulk travels as typed arrays, typed on both sides.
+
+use js_sys::{Array, Float32Array, Float64Array, Int32Array, Object, Reflect, Uint32Array, Uint8Array};
+use siftlab_core::dataset::PoseRow;
+use siftlab_core::matching::sweep::{Curve, Sweep};
+use siftlab_core::matching::StrategyKind;
+use siftlab_core::sift::{Features, KeyPoint};
+use wasm_bindgen::{JsCast, JsValue};
+
+/// Page → worker.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InsideRequest {
+    /// SIFT's anatomy of the image `bytes` (OpenCV SIMD width `lanes`).
+    Anatomy { id: u32, bytes: Vec<u8>, lanes: u32 },
+    /// The sweep of `prev` against `cur`, judged by the poses' epipolar
+    /// geometry within `px` pixels when the poses are known.
+    WholeFrame { id: u32, prev: Features, cur: Features, poses: Option<Box<[PoseRow; 2]>>, px: f64 },
+}
+
+/// One pyramid level, subsampled for display (`step` octave pixels per
+/// thumbnail pixel; the values are the level's own).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LevelThumb {
+    pub octave: u32,
+    pub index: u32,
+    pub dog: bool,
+    pub step: u32,
+    pub width: u32,
+    pub height: u32,
+    pub values: Vec<f32>,
+}
+
+/// What the anatomy view shows; keypoint-indexed fields follow the frame's
+/// keypoints (the funnel's last stage is that list).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnatomyData {
+    pub octaves: u32,
+    pub levels_per_octave: u32,
+    /// (stage, count) in pipeline order.
+    pub stages: Vec<(String, u32)>,
+    /// (reason, count) of the refinement's drops.
+    pub drops: Vec<(String, u32)>,
+    pub cutoff: Option<f32>,
+    pub levels: Vec<LevelThumb>,
+    /// Per stage, its points as x, y pairs in image pixels.
+    pub points: Vec<Vec<f32>>,
+    /// The dropped extrema (x, y pairs) and each one's reason (index into `drops`).
+    pub rejected: Vec<f32>,
+    pub rejected_why: Vec<u8>,
+    /// Per kept keypoint: 36 raw then 36 smoothed bins (NaN if unknown).
+    pub hist: Vec<f32>,
+    /// Per kept keypoint: the 80 % line.
+    pub hist_thr: Vec<f32>,
+    /// Per kept keypoint: how many peaks were taken, then all their (bin, angle) pairs.
+    pub peak_counts: Vec<u8>,
+    pub peaks: Vec<f32>,
+    pub ms: f64,
+}
+
+/// The sweep of a pair, and whether it was judged.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepData {
+    pub sweep: Sweep,
+    pub judged: bool,
+    pub px: f64,
+    pub ms: f64,
+}
+
+/// Worker → page.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InsideReply {
+    Anatomy { id: u32, data: Box<AnatomyData> },
+    WholeFrame { id: u32, data: Box<SweepData> },
+}
+
+fn set(o: &Object, k: &str, v: &JsValue) {
+    // Setting a property on a fresh plain object cannot fail.
+    let _ = Reflect::set(o, &JsValue::from_str(k), v);
+}
+
+fn get(o: &JsValue, k: &str) -> Result<JsValue, String> {
+    Reflect::get(o, &JsValue::from_str(k)).map_err(|_| format!("message has no field {k}"))
+}
+
+fn num(o: &JsValue, k: &str) -> Result<f64, String> {
+    get(o, k)?.as_f64().ok_or_else(|| format!("message field {k} is not a number"))
+}
+
+fn typed<T: JsCast>(o: &JsValue, k: &str) -> Result<T, String> {
+    get(o, k)?.dyn_into::<T>().map_err(|_| format!("message field {k} has the wrong array type"))
+}
+
+fn f32s(o: &JsValue, k: &str) -> Result<Vec<f32>, String> {
+    Ok(typed::<Float32Array>(o, k)?.to_vec())
+}
+
+fn named_counts(list: &[(String, u32)]) -> (JsValue, JsValue) {
+    let names: Array = list.iter().map(|(n, _)| JsValue::from_str(n)).collect();
+    let counts: Vec<u32> = list.iter().map(|(_, c)| *c).collect();
+    (names.into(), Uint32Array::from(counts.as_slice()).into())
+}
+
+fn get_named_counts(o: &JsValue, names: &str, counts: &str) -> Result<Vec<(String, u32)>, String> {
+    let n: Array = typed(o, names)?;
+    let c = typed::<Uint32Array>(o, counts)?.to_vec();
+    let names: Vec<String> = n.iter().filter_map(|v| v.as_string()).collect();
+    if names.len() != c.len() {
+        return Err(format!("{names:?} and {c:?} differ in length"));
+    }
+    Ok(names.into_iter().zip(c).collect())
+}
+
+fn features_js(o: &Object, prefix: &str, f: &Features) {
+    let kp: Vec<f32> = f.keypoints.iter().flat_map(|k| [k.x, k.y, k.size, k.angle, k.response]).collect();
+    let oct: Vec<i32> = f.keypoints.iter().map(|k| k.octave).collect();
+    let desc: Vec<u8> = f.descriptors.iter().flatten().copied().collect();
+    set(o, &format!("{prefix}Kp"), &Float32Array::from(kp.as_slice()).into());
+    set(o, &format!("{prefix}Octave"), &Int32Array::from(oct.as_slice()).into());
+    set(o, &format!("{prefix}Desc"), &Uint8Array::from(desc.as_slice()).into());
+}
+
+fn get_features(o: &JsValue, prefix: &str) -> Result<Features, String> {
+    let kp = f32s(o, &format!("{prefix}Kp"))?;
+    let oct = typed::<Int32Array>(o, &format!("{prefix}Octave"))?.to_vec();
+    let desc = typed::<Uint8Array>(o, &format!("{prefix}Desc"))?.to_vec();
+    if kp.len() != oct.len() * 5 || desc.len() != oct.len() * 128 {
+        return Err(format!("inconsistent {prefix} features in the message"));
+    }
+    let keypoints = kp
+        .chunks_exact(5)
+        .zip(&oct)
+        .map(|(f, &octave)| KeyPoint { x: f[0], y: f[1], size: f[2], angle: f[3], response: f[4], octave })
+        .collect();
+    let descriptors = desc.chunks_exact(128).map(|c| std::array::from_fn(|i| c[i])).collect();
+    Ok(Features { keypoints, descriptors })
+}
+
+impl InsideRequest {
+    pub fn to_js(&self) -> JsValue {
+        let o = Object::new();
+        match self {
+            InsideRequest::Anatomy { id, bytes, lanes } => {
+                set(&o, "type", &"anatomy".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "lanes", &(*lanes).into());
+                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
+            }
+            InsideRequest::WholeFrame { id, prev, cur, poses, px } => {
+                set(&o, "type", &"wholeFrame".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "px", &(*px).into());
+                features_js(&o, "prev", prev);
+                features_js(&o, "cur", cur);
+                let p = poses.as_ref().map(|ab| Float64Array::from(ab.concat().as_slice()).into());
+                set(&o, "poses", &p.unwrap_or(JsValue::NULL));
+            }
+        }
+        o.into()
+    }
+
+    /// `None` when `v` is not a "see inside" request.
+    pub fn from_js(v: &JsValue) -> Option<Result<Self, String>> {
+        let id = || Ok::<u32, String>(num(v, "id")? as u32);
+        match get(v, "type").ok()?.as_string()?.as_str() {
+            "anatomy" => Some((|| {
+                Ok(InsideRequest::Anatomy {
+                    id: id()?,
+                    bytes: typed::<Uint8Array>(v, "bytes")?.to_vec(),
+                    lanes: num(v, "lanes")? as u32,
+                })
+            })()),
+            "wholeFrame" => Some((|| {
+                let p = get(v, "poses")?;
+                let poses = if p.is_null() || p.is_undefined() {
+                    None
+                } else {
+                    let a = p.dyn_into::<Float64Array>().map_err(|_| "poses is not a Float64Array")?.to_vec();
+                    let row = |i: usize| -> Result<PoseRow, String> {
+                        a.get(12 * i..12 * i + 12)
+                            .and_then(|s| s.try_into().ok())
+                            .ok_or_else(|| "poses needs 24 numbers".to_string())
+                    };
+                    Some(Box::new([row(0)?, row(1)?]))
+                };
+                Ok(InsideRequest::WholeFrame {
+                    id: id()?,
+                    prev: get_features(v, "prev")?,
+                    cur: get_features(v, "cur")?,
+                    poses,
+                    px: num(v, "px")?,
+                })
+            })()),
+            _ => None,
+        }
+    }
+}
+
+fn level_js(l: &LevelThumb) -> JsValue {
+    let o = Object::new();
+    for (k, v) in [("octave", l.octave), ("index", l.index), ("step", l.step), ("width", l.width), ("height", l.height)]
+    {
+        set(&o, k, &v.into());
+    }
+    set(&o, "dog", &l.dog.into());
+    set(&o, "values", &Float32Array::from(l.values.as_slice()).into());
+    o.into()
+}
+
+fn get_level(v: &JsValue) -> Result<LevelThumb, String> {
+    let n = |k: &str| num(v, k).map(|x| x as u32);
+    let l = LevelThumb {
+        octave: n("octave")?,
+        index: n("index")?,
+        dog: get(v, "dog")?.as_bool().unwrap_or(false),
+        step: n("step")?,
+        width: n("width")?,
+        height: n("height")?,
+        values: f32s(v, "values")?,
+    };
+    if l.values.len() != (l.width * l.height) as usize {
+        return Err("a pyramid level's size does not match its values".into());
+    }
+    Ok(l)
+}
+
+const KINDS: [(&str, StrategyKind); 3] =
+    [("dt", StrategyKind::Dt), ("nn", StrategyKind::Nn), ("nndr", StrategyKind::Nndr)];
+
+impl InsideReply {
+    pub fn to_js(&self) -> JsValue {
+        let o = Object::new();
+        match self {
+            InsideReply::Anatomy { id, data: d } => {
+                set(&o, "type", &"anatomyDone".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "octaves", &d.octaves.into());
+                set(&o, "levelsPerOctave", &d.levels_per_octave.into());
+                let (n, c) = named_counts(&d.stages);
+                set(&o, "stageNames", &n);
+                set(&o, "stageCounts", &c);
+                let (n, c) = named_counts(&d.drops);
+                set(&o, "dropNames", &n);
+                set(&o, "dropCounts", &c);
+                set(&o, "cutoff", &d.cutoff.map(|c| JsValue::from_f64(c as f64)).unwrap_or(JsValue::NULL));
+                let levels: Array = d.levels.iter().map(level_js).collect();
+                set(&o, "levels", &levels.into());
+                let points: Array = d.points.iter().map(|p| JsValue::from(Float32Array::from(p.as_slice()))).collect();
+                set(&o, "points", &points.into());
+                set(&o, "rejected", &Float32Array::from(d.rejected.as_slice()).into());
+                set(&o, "rejectedWhy", &Uint8Array::from(d.rejected_why.as_slice()).into());
+                set(&o, "hist", &Float32Array::from(d.hist.as_slice()).into());
+                set(&o, "histThr", &Float32Array::from(d.hist_thr.as_slice()).into());
+                set(&o, "peakCounts", &Uint8Array::from(d.peak_counts.as_slice()).into());
+                set(&o, "peaks", &Float32Array::from(d.peaks.as_slice()).into());
+                set(&o, "ms", &d.ms.into());
+            }
+            InsideReply::WholeFrame { id, data } => {
+                set(&o, "type", &"wholeFrameDone".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "judged", &data.judged.into());
+                set(&o, "px", &data.px.into());
+                set(&o, "ms", &data.ms.into());
+                for (name, kind) in KINDS {
+                    let (keys, pairs, ok, max) = data.sweep.curve(kind).parts();
+                    let flat: Vec<u32> = pairs.iter().flatten().copied().collect();
+                    set(&o, &format!("{name}Keys"), &Float64Array::from(keys).into());
+                    set(&o, &format!("{name}Pairs"), &Uint32Array::from(flat.as_slice()).into());
+                    let ok: Option<Vec<u8>> = ok.map(|o| o.iter().map(|&b| b as u8).collect());
+                    let ok = ok.map(|o| Uint8Array::from(o.as_slice()).into()).unwrap_or(JsValue::NULL);
+                    set(&o, &format!("{name}Ok"), &ok);
+                    set(&o, &format!("{name}Max"), &max.into());
+                }
+            }
+        }
+        o.into()
+    }
+
+    /// `None` when `v` is not a "see inside" reply.
+    pub fn from_js(v: &JsValue) -> Option<Result<Self, String>> {
+        let id = || Ok::<u32, String>(num(v, "id")? as u32);
+        match get(v, "type").ok()?.as_string()?.as_str() {
+            "anatomyDone" => Some((|| {
+                let levels: Array = typed(v, "levels")?;
+                let points: Array = typed(v, "points")?;
+                let cutoff = get(v, "cutoff")?.as_f64().map(|c| c as f32);
+                let data = AnatomyData {
+                    octaves: num(v, "octaves")? as u32,
+                    levels_per_octave: num(v, "levelsPerOctave")? as u32,
+                    stages: get_named_counts(v, "stageNames", "stageCounts")?,
+                    drops: get_named_counts(v, "dropNames", "dropCounts")?,
+                    cutoff,
+                    levels: levels.iter().map(|l| get_level(&l)).collect::<Result<_, _>>()?,
+                    points: points
+                        .iter()
+                        .map(|p| p.dyn_into::<Float32Array>().map(|a| a.to_vec()))
+                        .collect::<Result<_, _>>()
+                        .map_err(|_| "points are not Float32Arrays")?,
+                    rejected: f32s(v, "rejected")?,
+                    rejected_why: typed::<Uint8Array>(v, "rejectedWhy")?.to_vec(),
+                    hist: f32s(v, "hist")?,
+                    hist_thr: f32s(v, "histThr")?,
+                    peak_counts: typed::<Uint8Array>(v, "peakCounts")?.to_vec(),
+                    peaks: f32s(v, "peaks")?,
+                    ms: num(v, "ms")?,
+                };
+                Ok(InsideReply::Anatomy { id: id()?, data: Box::new(data) })
+            })()),
+            "wholeFrameDone" => Some((|| {
+                let curve = |name: &str, kind| -> Result<Curve, String> {
+                    let keys = typed::<Float64Array>(v, &format!("{name}Keys"))?.to_vec();
+                    let flat = typed::<Uint32Array>(v, &format!("{name}Pairs"))?.to_vec();
+                    let pairs = flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+                    let ok = get(v, &format!("{name}Ok"))?;
+                    let ok = ok.dyn_into::<Uint8Array>().ok().map(|a| a.to_vec().into_iter().map(|b| b != 0).collect());
+                    Curve::from_parts(kind, keys, pairs, ok, num(v, &format!("{name}Max"))?).map_err(|e| e.to_string())
+                };
+                let sweep = Sweep {
+                    dt: curve("dt", StrategyKind::Dt)?,
+                    nn: curve("nn", StrategyKind::Nn)?,
+                    nndr: curve("nndr", StrategyKind::Nndr)?,
+                };
+                let data = SweepData {
+                    sweep,
+                    judged: get(v, "judged")?.as_bool().unwrap_or(false),
+                    px: num(v, "px")?,
+                    ms: num(v, "ms")?,
+                };
+                Ok(InsideReply::WholeFrame { id: id()?, data: Box::new(data) })
+            })()),
+            _ => None,
+        }
+    }
+}
