@@ -62,7 +62,7 @@ fn message(d: &mut &[u8]) {
         Err(m) => assert!(m.contains("id"), "{m}"),
     }
     let n = byte(d) as usize % 24;
-    let flat: Vec<f32> = take(d, n * 4).chunks(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    let flat: Vec<f32> = take(d, n * 4).chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
     if let Ok(p) = points_field("points", &flat) {
         assert_eq!(p.len() * 2, flat.len());
     }

@@ -172,7 +172,15 @@ pub fn compare_decoders(bytes: &[u8]) {
             match reference_gray(bytes) {
                 Some((w, h, px)) => {
                     assert_eq!((img.width(), img.height()), (w, h), "the two decoders disagree on the size");
-                    assert!(img.data() == px.as_slice(), "siftlab and the image crate decode different pixels");
+                    if let Some(i) = img.data().iter().zip(&px).position(|(a, b)| a != b) {
+                        panic!(
+                            "siftlab and the image crate decode different pixels: at ({}, {}) {} vs {} in a {w}x{h} image",
+                            i % w,
+                            i / w,
+                            img.data()[i],
+                            px[i]
+                        );
+                    }
                 }
                 // siftlab gave a picture the image crate refuses: only a
                 // stricter reference is acceptable, never a second picture,
@@ -333,7 +341,7 @@ fn features(descriptors: Vec<[u8; 128]>) -> Features {
 /// and thresholds, against the naive version above.
 pub fn matching(data: &[u8]) {
     let mut r = Bytes(data);
-    let (np, nc) = (r.u8() as usize % 40, r.u8() as usize % 80);
+    let (np, nc) = (r.u8() as usize % 24, r.u8() as usize % 40);
     let algo = ["dt", "nn", "nndr", "knn", "", "NN"][r.u8() as usize % 6];
     let threshold = if r.u8() % 4 == 0 { None } else { Some(r.f64()) };
     let direct = r.u8();
@@ -471,7 +479,8 @@ pub fn poses(data: &[u8]) {
             }
         }
     }
-    if mode & 15 == 0 {
+    // The file-system part is slow (a folder per run): one mode value in 16.
+    if mode & 15 == 15 {
         open_layout(mode, rest);
     }
 }

@@ -9,7 +9,7 @@
 #   tests/fuzz/run.sh png_diff sift   # some targets
 #   RUNS_SCALE=0.1 tests/fuzz/run.sh  # a tenth of each budget (a smoke run)
 #
-# A crash, timeout or OOM stops the target and leaves its input in
+# A crash, timeout or OOM stops that target (the others still run) and leaves its input in
 # fuzz/artifacts/<target>/; minimise it (cargo +nightly fuzz tmin <target> <file>),
 # copy it into tests/fuzz/regressions/<target>/ and fix the code: the stable
 # test core/tests/fuzz_regressions.rs (app/tests/... for app_state) replays it.
@@ -51,10 +51,11 @@ seed() {
             cp -n "$dir"/../sift-16/* "$dir"/ && rm -rf "$dir/../sift-16" ;;
         poses)
             { printf '\x30'; head -n 20 "$ROOT/www/demo/MyKITTI/poses/00.txt"; } > "$dir/kitti-20"
-            { printf '\x00'; head -n 3 "$ROOT/www/demo/MyKITTI/poses/00.txt"; } > "$dir/kitti-3-layout" ;;
+            { printf '\x0f'; head -n 3 "$ROOT/www/demo/MyKITTI/poses/00.txt"; } > "$dir/kitti-3-layout" ;;
     esac
 }
 
+FAILED=()
 DICT_ARGS=()
 for t in "${TARGETS[@]}"; do
     [ -n "${RUNS[$t]:-}" ] || { echo "unknown target $t (one of ${ORDER[*]})" >&2; exit 2; }
@@ -71,6 +72,7 @@ for t in "${TARGETS[@]}"; do
     grep -E '^(#[0-9]+ +DONE|stat::number_of_executed_units|stat::peak_rss_mb|SUMMARY)|(ERROR|WARNING): libFuzzer' "corpus/$t.log" || true
     if [ "$rc" != 0 ]; then
         echo "$t: a finding (exit $rc), see fuzz/corpus/$t.log and fuzz/artifacts/$t/" >&2
-        exit 1
+        FAILED+=("$t")
     fi
 done
+[ ${#FAILED[@]} -eq 0 ] || { echo "findings in: ${FAILED[*]}" >&2; exit 1; }
