@@ -99,12 +99,16 @@ impl GrayImage {
             // samples before converting); `to_rgb8` would round instead and
             // differ by one on about half the pixels (found by fuzzing,
             // tests/fuzz/regressions/png_diff).
-            D::ImageRgb16(g) => {
-                g.as_raw().chunks_exact(3).map(|p| bgr_to_gray((p[2] >> 8) as u8, (p[1] >> 8) as u8, (p[0] >> 8) as u8)).collect()
-            }
-            D::ImageRgba16(g) => {
-                g.as_raw().chunks_exact(4).map(|p| bgr_to_gray((p[2] >> 8) as u8, (p[1] >> 8) as u8, (p[0] >> 8) as u8)).collect()
-            }
+            D::ImageRgb16(g) => g
+                .as_raw()
+                .chunks_exact(3)
+                .map(|p| bgr_to_gray((p[2] >> 8) as u8, (p[1] >> 8) as u8, (p[0] >> 8) as u8))
+                .collect(),
+            D::ImageRgba16(g) => g
+                .as_raw()
+                .chunks_exact(4)
+                .map(|p| bgr_to_gray((p[2] >> 8) as u8, (p[1] >> 8) as u8, (p[0] >> 8) as u8))
+                .collect(),
             other => {
                 let rgb = other.to_rgb8();
                 rgb.as_raw().chunks_exact(3).map(|p| bgr_to_gray(p[2], p[1], p[0])).collect()

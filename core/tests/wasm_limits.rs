@@ -42,7 +42,9 @@ fn png_header(w: u32, h: u32, colour: u8) -> Vec<u8> {
 fn over_the_limit_is_refused_from_the_header() {
     let before = memory_mib();
     // 4-gigapixel and just-over headers, both gray (fast path) and RGB.
-    for (w, h, colour) in [(65535, 65535, 0), (4001, 4000, 0), (16_000_001, 1, 0), (4001, 4000, 2), (1 << 30, 1 << 30, 6)] {
+    for (w, h, colour) in
+        [(65535, 65535, 0), (4001, 4000, 0), (16_000_001, 1, 0), (4001, 4000, 2), (1 << 30, 1 << 30, 6)]
+    {
         let e = GrayImage::decode(&png_header(w, h, colour)).unwrap_err();
         assert!(matches!(e, Error::TooLarge { .. }), "{w}x{h}: {e}");
         assert!(e.to_string().contains("above the limit of 16000000 pixels"), "{e}");

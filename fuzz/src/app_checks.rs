@@ -110,7 +110,8 @@ fn answer(d: &[u8]) {
 fn frames(d: &mut &[u8]) {
     let run = u32::from_le_bytes([byte(d), byte(d), byte(d), byte(d)]);
     let n = byte(d) as usize % 16;
-    let ids: Vec<u32> = (0..n).map(|_| u32::from_le_bytes([byte(d), byte(d), byte(d), byte(d)]) >> (byte(d) % 33).min(31)).collect();
+    let ids: Vec<u32> =
+        (0..n).map(|_| u32::from_le_bytes([byte(d), byte(d), byte(d), byte(d)]) >> (byte(d) % 33).min(31)).collect();
     let text = String::from_utf8_lossy(d);
     let _ = frameset::vo_range_label(&text, run);
     match frameset::vo_frame_count(&text, run) {
@@ -138,7 +139,8 @@ fn exercises(d: &mut &[u8]) {
     let seed = f64_of(d).to_bits();
     let q = u32::from_le_bytes([byte(d), byte(d), byte(d), byte(d)]);
     let n = byte(d) as usize % 12;
-    let frames: Vec<u32> = (0..n).map(|_| u32::from_le_bytes([byte(d), byte(d), byte(d), byte(d)]) >> (byte(d) % 32)).collect();
+    let frames: Vec<u32> =
+        (0..n).map(|_| u32::from_le_bytes([byte(d), byte(d), byte(d), byte(d)]) >> (byte(d) % 32)).collect();
     if let Some(qn) = exercise::question(seed, q, &frames) {
         assert!(frames.contains(&qn.frame_id) && frames.contains(&(qn.frame_id - 1)));
         assert!((0.0..1.0).contains(&qn.feature_pos));
