@@ -115,7 +115,7 @@ pub fn u32_field(k: &str, v: Option<f64>) -> Result<u32, String> {
 
 /// Flat x, y coordinates as points.
 pub fn points_field(k: &str, flat: &[f32]) -> Result<Vec<[f32; 2]>, String> {
-    if flat.len() % 2 != 0 {
+    if !flat.len().is_multiple_of(2) {
         return Err(format!("message field {k} has an odd number of coordinates"));
     }
     Ok(flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect())

@@ -63,6 +63,14 @@ impl GrayImage {
         if !matches!(format, image::ImageFormat::Png | image::ImageFormat::Jpeg) {
             return Err(Error::Decode(format!("unsupported image format {format:?}: use a PNG or JPEG frame")));
         }
+        // The limit from the PNG header itself: for a huge header the png
+        // crate fails first with its own "Memory limit exceeded", which
+        // says nothing about the size (found by core/tests/wasm_limits.rs).
+        if let Some((w, h)) = crate::gray_png::ihdr_size(bytes) {
+            if w as u64 * h as u64 > MAX_PIXELS {
+                return Err(Error::TooLarge { width: w, height: h, limit: MAX_PIXELS });
+            }
+        }
         let reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
         let mut decoder = reader;
         let mut limits = image::Limits::default();

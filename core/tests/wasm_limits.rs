@@ -35,6 +35,13 @@ fn png_header(w: u32, h: u32, colour: u8) -> Vec<u8> {
     h.update(b"IHDR");
     h.update(&ihdr);
     out.extend_from_slice(&h.finalize().to_be_bytes());
+    // An empty IDAT and IEND: the png crate reads up to the first IDAT
+    // before it reports the dimensions (a bare header is "truncated").
+    for kind in [b"IDAT", b"IEND"] {
+        out.extend_from_slice(&0u32.to_be_bytes());
+        out.extend_from_slice(kind);
+        out.extend_from_slice(&crc32fast::hash(kind).to_be_bytes());
+    }
     out
 }
 
