@@ -65,7 +65,9 @@ pub fn run_from_zero(ids: &[u32]) -> u32 {
 
 /// `frames 0 to 99 (100 frames)`: what `view_trajectory FRAME_ID` runs over.
 pub fn vo_range_text(frame_id: u32) -> String {
-    format!("frames 0 to {frame_id} ({} frames)", frame_id + 1)
+    // In u64: FRAME_ID 4294967295 (a link or the box can say it) overflowed
+    // u32 (found by fuzzing, tests/fuzz/regressions/app_state).
+    format!("frames 0 to {frame_id} ({} frames)", frame_id as u64 + 1)
 }
 
 /// What the odometry's FRAME_ID box reads as, beside it: the frames it asks

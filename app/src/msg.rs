@@ -108,7 +108,36 @@ fn get(o: &JsValue, k: &str) -> Result<JsValue, String> {
 }
 
 fn get_u32(o: &JsValue, k: &str) -> Result<u32, String> {
-    get(o, k)?.as_f64().map(|v| v as u32).ok_or_else(|| format!("message field {k} is not a number"))
+    u32_field(k, get(o, k)?.as_f64())
+}
+
+// The checks below take plain Rust values, not `JsValue`s, so they build and
+// run natively: `fuzz/fuzz_targets/app_state.rs` and the host tests call them
+// (wasm-bindgen's imports panic off wasm32).
+
+/// A JS number as a u32 message field: a whole number in 0..=u32::MAX. An
+/// `as u32` cast would turn NaN, -1 or 1e20 silently into 0 or u32::MAX,
+/// i.e. another id or frame than the one sent.
+pub fn u32_field(k: &str, v: Option<f64>) -> Result<u32, String> {
+    let v = v.ok_or_else(|| format!("message field {k} is not a number"))?;
+    if v.fract() == 0.0 && (0.0..=u32::MAX as f64).contains(&v) {
+        Ok(v as u32)
+    } else {
+        Err(format!("message field {k} is {v}, not a whole number in 0..={}", u32::MAX))
+    }
+}
+
+/// Flat x, y coordinates as points.
+pub fn points_field(k: &str, flat: &[f32]) -> Result<Vec<[f32; 2]>, String> {
+    if !flat.len().is_multiple_of(2) {
+        return Err(format!("message field {k} has an odd number of coordinates"));
+    }
+    Ok(flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect())
+}
+
+/// Exactly three numbers as a 3-vector.
+pub fn vec3_field(k: &str, a: &[f64]) -> Result<[f64; 3], String> {
+    <[f64; 3]>::try_from(a).map_err(|_| format!("message field {k} needs 3 numbers"))
 }
 
 fn get_f64(o: &JsValue, k: &str) -> Result<f64, String> {
@@ -133,7 +162,7 @@ fn get_vec3(o: &JsValue, k: &str) -> Result<Option<[f64; 3]>, String> {
     }
     let a =
         v.dyn_into::<js_sys::Float64Array>().map_err(|_| format!("message field {k} is not a Float64Array"))?.to_vec();
-    <[f64; 3]>::try_from(a.as_slice()).map(Some).map_err(|_| format!("message field {k} needs 3 numbers"))
+    vec3_field(k, &a).map(Some)
 }
 
 fn vec3(v: &[f64; 3]) -> JsValue {
@@ -151,10 +180,7 @@ fn get_points(o: &JsValue, k: &str) -> Result<Option<Vec<[f32; 2]>>, String> {
         return Ok(None);
     }
     let flat = v.dyn_into::<Float32Array>().map_err(|_| format!("message field {k} is not a Float32Array"))?.to_vec();
-    if flat.len() % 2 != 0 {
-        return Err(format!("message field {k} has an odd number of coordinates"));
-    }
-    Ok(Some(flat.chunks_exact(2).map(|c| [c[0], c[1]]).collect()))
+    points_field(k, &flat).map(Some)
 }
 
 fn kind(o: &JsValue) -> Result<String, String> {
@@ -235,7 +261,7 @@ impl ToWorker {
 }
 
 /// Keypoint floats per keypoint in the `kp` array: x, y, size, angle, response.
-const KP_FLOATS: usize = 5;
+pub const KP_FLOATS: usize = 5;
 
 impl FromWorker {
     pub fn to_js(&self) -> JsValue {
@@ -342,12 +368,6 @@ impl FromWorker {
                 points: get_points(v, "points")?.ok_or("detected without points")?,
             }),
             "done" => {
-                let width = get_u32(v, "width")? as usize;
-                let height = get_u32(v, "height")? as usize;
-                let gray = get_bytes(v, "gray")?;
-                if gray.len() != width * height {
-                    return Err(format!("gray buffer has {} bytes for {width}x{height}", gray.len()));
-                }
                 let kp = get(v, "kp")?
                     .dyn_into::<Float32Array>()
                     .map_err(|_| "message field kp is not a Float32Array".to_string())?
@@ -356,42 +376,81 @@ impl FromWorker {
                     .dyn_into::<Int32Array>()
                     .map_err(|_| "message field octave is not an Int32Array".to_string())?
                     .to_vec();
-                let desc = get_bytes(v, "desc")?;
-                let n = octave.len();
-                if kp.len() != n * KP_FLOATS || desc.len() != n * 128 {
-                    return Err(format!(
-                        "inconsistent SIFT message: {n} octaves, {} floats, {} descriptor bytes",
-                        kp.len(),
-                        desc.len()
-                    ));
-                }
-                let keypoints = kp
-                    .chunks_exact(KP_FLOATS)
-                    .zip(&octave)
-                    .map(|(f, &octave)| KeyPoint { x: f[0], y: f[1], size: f[2], angle: f[3], response: f[4], octave })
-                    .collect();
-                let descriptors = desc
-                    .chunks_exact(128)
-                    .map(|c| {
-                        let mut d = [0u8; 128];
-                        d.copy_from_slice(c);
-                        d
-                    })
-                    .collect();
+                let parts = SiftParts {
+                    width: get_u32(v, "width")?,
+                    height: get_u32(v, "height")?,
+                    gray: get_bytes(v, "gray")?,
+                    kp,
+                    octave,
+                    desc: get_bytes(v, "desc")?,
+                };
                 Ok(FromWorker::Done {
                     id: get_u32(v, "id")?,
                     result: SiftResult {
-                        width,
-                        height,
-                        gray,
-                        features: Features { keypoints, descriptors },
                         decode_ms: get_f64(v, "decodeMs")?,
                         sift_ms: get_f64(v, "siftMs")?,
                         engine: get_str(v, "engine")?,
+                        ..parts.check()?
                     },
                 })
             }
             other => Err(format!("unknown message type {other:?}")),
         }
+    }
+}
+
+/// The bulk of a `done` message as it arrives: the gray image and the
+/// keypoints and descriptors as flat arrays.
+#[derive(Debug, Clone, Default)]
+pub struct SiftParts {
+    pub width: u32,
+    pub height: u32,
+    pub gray: Vec<u8>,
+    /// [`KP_FLOATS`] floats per keypoint.
+    pub kp: Vec<f32>,
+    pub octave: Vec<i32>,
+    /// 128 bytes per keypoint.
+    pub desc: Vec<u8>,
+}
+
+impl SiftParts {
+    /// Checks the sizes agree and builds the result (timings and engine
+    /// empty). Sizes are compared in u64: in usize, 65536 × 65536 wraps to 0
+    /// on wasm32 and an empty buffer would pass as a 4-gigapixel image.
+    pub fn check(self) -> Result<SiftResult, String> {
+        let SiftParts { width, height, gray, kp, octave, desc } = self;
+        if gray.len() as u64 != width as u64 * height as u64 {
+            return Err(format!("gray buffer has {} bytes for {width}x{height}", gray.len()));
+        }
+        let n = octave.len() as u64;
+        if kp.len() as u64 != n * KP_FLOATS as u64 || desc.len() as u64 != n * 128 {
+            return Err(format!(
+                "inconsistent SIFT message: {n} octaves, {} floats, {} descriptor bytes",
+                kp.len(),
+                desc.len()
+            ));
+        }
+        let keypoints = kp
+            .chunks_exact(KP_FLOATS)
+            .zip(&octave)
+            .map(|(f, &octave)| KeyPoint { x: f[0], y: f[1], size: f[2], angle: f[3], response: f[4], octave })
+            .collect();
+        let descriptors = desc
+            .chunks_exact(128)
+            .map(|c| {
+                let mut d = [0u8; 128];
+                d.copy_from_slice(c);
+                d
+            })
+            .collect();
+        Ok(SiftResult {
+            width: width as usize,
+            height: height as usize,
+            gray,
+            features: Features { keypoints, descriptors },
+            decode_ms: 0.0,
+            sift_ms: 0.0,
+            engine: String::new(),
+        })
     }
 }

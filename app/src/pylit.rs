@@ -40,7 +40,15 @@ impl Py {
 struct P<'a> {
     s: &'a [u8],
     i: usize,
+    /// Brackets open around the current value.
+    depth: usize,
 }
+
+/// The deepest nesting read: the lab's answer has 3 levels. Each level is a
+/// recursive call, and a pasted `[[[[…` thousands deep would overflow the
+/// stack (1 MB on wasm32) and kill the page (found by fuzzing,
+/// tests/fuzz/regressions/app_state).
+const MAX_DEPTH: usize = 32;
 
 impl P<'_> {
     fn ws(&mut self) {
@@ -59,6 +67,16 @@ impl P<'_> {
     }
 
     fn seq(&mut self, close: u8) -> Result<(Vec<Py>, bool), String> {
+        if self.depth >= MAX_DEPTH {
+            return self.err(&format!("brackets nested more than {MAX_DEPTH} deep"));
+        }
+        self.depth += 1;
+        let r = self.seq_items(close);
+        self.depth -= 1;
+        r
+    }
+
+    fn seq_items(&mut self, close: u8) -> Result<(Vec<Py>, bool), String> {
         // Returns the items and whether a comma was seen (to tell `(x)` from `(x,)`).
         let mut items = Vec::new();
         let mut comma = false;
@@ -167,7 +185,7 @@ impl P<'_> {
 pub fn parse(text: &str) -> Result<Py, String> {
     let t = text.trim();
     let t = t.strip_prefix("ret value:").unwrap_or(t);
-    let mut p = P { s: t.as_bytes(), i: 0 };
+    let mut p = P { s: t.as_bytes(), i: 0, depth: 0 };
     let v = p.value()?;
     if p.peek().is_some() {
         return p.err("unexpected text after the value");
@@ -178,6 +196,14 @@ pub fn parse(text: &str) -> Result<Py, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn deep_nesting_is_an_error_not_a_stack_overflow() {
+        let deep = "[".repeat(200_000);
+        assert!(parse(&deep).unwrap_err().contains("nested more than 32 deep"));
+        let ok = format!("{}1{}", "(".repeat(32), ")".repeat(32));
+        assert_eq!(parse(&ok).unwrap(), Py::Int(1));
+    }
 
     #[test]
     fn reads_the_lab_tuple() {

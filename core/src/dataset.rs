@@ -91,6 +91,27 @@ pub fn gt_scale(poses: &[PoseRow], i: usize) -> Result<f64> {
 /// double-double (exact products by FMA, TwoSum), then the square root gets
 /// one Newton correction. A plain `sqrt(dx²+dy²+dz²)` can be off by one ulp.
 pub fn dist3(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    // Squares of differences above ~1e154 overflow (the error terms become
+    // inf - inf = NaN) and below ~1e-154 underflow, where math.dist still
+    // gives the distance: such points are scaled by a power of two first.
+    // Real poses never get here, so their results keep every bit (found by
+    // fuzzing, tests/fuzz/regressions/poses).
+    let m = (0..3).map(|k| (a[k] - b[k]).abs()).fold(0.0f64, f64::max);
+    if m != 0.0 && !(TINY..=HUGE).contains(&m) && a.iter().chain(b).all(|v| v.is_finite()) {
+        // Both points times the same power of two (exact); an overflowed
+        // difference (m = inf) is brought in range by a second pass.
+        let k = if m.is_finite() { m.log2().floor() as i32 } else { 4 };
+        let s = 2f64.powi(-k);
+        let (sa, sb) = (a.map(|v| v * s), b.map(|v| v * s));
+        return dist3(&sa, &sb) * 2f64.powi(k);
+    }
+    dist3_unscaled(a, b)
+}
+
+const HUGE: f64 = 1.0e150;
+const TINY: f64 = 1.0e-150;
+
+fn dist3_unscaled(a: &[f64; 3], b: &[f64; 3]) -> f64 {
     let (mut hi, mut lo) = (0.0f64, 0.0f64);
     for k in 0..3 {
         let d = a[k] - b[k];
@@ -186,6 +207,18 @@ impl Dataset {
 
     /// Checks that frames 0..n and their poses exist.
     pub fn check_frames(&self, n: usize) -> Result<()> {
+        // A picked folder can have no frame at all (`from_parts` with 0):
+        // "frames 0 to -1" cannot be said, and `frame_count - 1` underflowed
+        // (found by fuzzing, tests/fuzz/regressions/poses).
+        if n > 0 && self.frame_count == 0 {
+            return Err(Error::Dataset(format!(
+                "frames 0 to {} are needed but {} has no frame {} (expected the MyKITTI layout: \
+                 gray/00/image_0/000000.png ...)",
+                n - 1,
+                self.root.display(),
+                frame_relative_path(0)
+            )));
+        }
         if n > self.frame_count {
             return Err(Error::Dataset(format!(
                 "frames 0 to {} are needed but {} has frames 0 to {} only ({} is missing); ask for FRAME_ID {} or less",
@@ -243,6 +276,16 @@ mod tests {
     }
 
     #[test]
+    fn huge_and_tiny_distances_are_finite_like_math_dist() {
+        // math.dist((0, 0, 0), (1e200, 0, 0)) == 1e200; math.dist((0,0,0), (3e-200, 4e-200, 0)) == 5e-200.
+        assert_eq!(dist3(&[0.0; 3], &[1e200, 0.0, 0.0]), 1e200);
+        assert_eq!(dist3(&[-1e300, 0.0, 0.0], &[1e300, 0.0, 0.0]), 2e300);
+        assert_eq!(dist3(&[-f64::MAX, 0.0, 0.0], &[f64::MAX, 0.0, 0.0]), f64::INFINITY);
+        let d = dist3(&[0.0; 3], &[3e-200, 4e-200, 0.0]);
+        assert!((d - 5e-200).abs() <= 5e-200 * 1e-15, "{d}");
+    }
+
+    #[test]
     fn malformed_lines_are_named() {
         let e = parse_poses("1 0 0 0 0 1 0 0 0 0 1 0\n1 2 3\n").unwrap_err();
         assert_eq!(e.to_string(), "poses/00.txt line 2: expected 12 numbers (a 3x4 [R|t] matrix), found 3");
@@ -283,6 +326,8 @@ mod tests {
         assert_eq!(ds.load_frame(0).unwrap().get(2, 1), 41);
         let e = ds.load_frame(1).unwrap_err().to_string();
         assert!(e.starts_with("frame 1 ("), "{e}");
+        let e = Dataset::from_parts("picked".into(), 0, ds.poses().to_vec()).check_frames(1).unwrap_err().to_string();
+        assert!(e.contains("has no frame gray/00/image_0/000000.png"), "{e}");
         let e = ds.check_frames(3).unwrap_err().to_string();
         assert!(e.contains("has frames 0 to 1 only (gray/00/image_0/000002.png is missing)"), "{e}");
         std::fs::remove_dir_all(&dir).unwrap();

@@ -35,6 +35,18 @@ pub fn decode_gray8(bytes: &[u8], max_pixels: u64) -> Option<Result<(usize, usiz
     Some(inflate_and_unfilter(chunks, w as usize, h as usize))
 }
 
+/// The (width, height) of a PNG's IHDR, if `bytes` start like a PNG with
+/// one; read without checking anything else, for the pixel limit.
+pub(crate) fn ihdr_size(bytes: &[u8]) -> Option<(u32, u32)> {
+    let rest = bytes.strip_prefix(&SIGNATURE)?;
+    if rest.len() < 16 || &rest[4..8] != b"IHDR" {
+        return None;
+    }
+    let w = u32::from_be_bytes([rest[8], rest[9], rest[10], rest[11]]);
+    let h = u32::from_be_bytes([rest[12], rest[13], rest[14], rest[15]]);
+    Some((w, h))
+}
+
 fn corrupt(what: &str) -> Error {
     Error::Decode(format!("the image is corrupt or truncated ({what}); re-export or re-download it"))
 }

@@ -63,6 +63,14 @@ impl GrayImage {
         if !matches!(format, image::ImageFormat::Png | image::ImageFormat::Jpeg) {
             return Err(Error::Decode(format!("unsupported image format {format:?}: use a PNG or JPEG frame")));
         }
+        // The limit from the PNG header itself: for a huge header the png
+        // crate fails first with its own "Memory limit exceeded", which
+        // says nothing about the size (found by core/tests/wasm_limits.rs).
+        if let Some((w, h)) = crate::gray_png::ihdr_size(bytes) {
+            if w as u64 * h as u64 > MAX_PIXELS {
+                return Err(Error::TooLarge { width: w, height: h, limit: MAX_PIXELS });
+            }
+        }
         let reader = image::ImageReader::with_format(std::io::Cursor::new(bytes), format);
         let mut decoder = reader;
         let mut limits = image::Limits::default();
@@ -95,6 +103,20 @@ impl GrayImage {
             D::ImageLumaA8(g) => g.as_raw().chunks_exact(2).map(|p| p[0]).collect(),
             D::ImageLuma16(g) => g.as_raw().iter().map(|&v| (v >> 8) as u8).collect(),
             D::ImageLumaA16(g) => g.as_raw().chunks_exact(2).map(|p| (p[0] >> 8) as u8).collect(),
+            // 16-bit colour keeps the high byte too (OpenCV strips 16-bit
+            // samples before converting); `to_rgb8` would round instead and
+            // differ by one on about half the pixels (found by fuzzing,
+            // tests/fuzz/regressions/png_diff).
+            D::ImageRgb16(g) => g
+                .as_raw()
+                .chunks_exact(3)
+                .map(|p| bgr_to_gray((p[2] >> 8) as u8, (p[1] >> 8) as u8, (p[0] >> 8) as u8))
+                .collect(),
+            D::ImageRgba16(g) => g
+                .as_raw()
+                .chunks_exact(4)
+                .map(|p| bgr_to_gray((p[2] >> 8) as u8, (p[1] >> 8) as u8, (p[0] >> 8) as u8))
+                .collect(),
             other => {
                 let rgb = other.to_rgb8();
                 rgb.as_raw().chunks_exact(3).map(|p| bgr_to_gray(p[2], p[1], p[0])).collect()

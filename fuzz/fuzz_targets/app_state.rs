@@ -1,0 +1,7 @@
+#![no_main]
+//! See fuzz/src/app_checks.rs and docs/fuzzing.md.
+
+#[path = "../src/app_checks.rs"]
+mod checks;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| checks::app_state(data));

@@ -1,0 +1,7 @@
+#![no_main]
+//! See fuzz/src/core_checks.rs and docs/fuzzing.md.
+
+#[path = "../src/core_checks.rs"]
+mod checks;
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| checks::png_diff(data));
