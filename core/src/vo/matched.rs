@@ -16,11 +16,11 @@
 //! the query set of the next.
 
 use super::camera::Camera;
-use super::linalg::{mat_mul, mat_vec, Mat3, Vec3, IDENTITY};
-use super::odometry::StepResult;
+use super::linalg::{Mat3, Vec3, IDENTITY};
+use super::odometry::{apply_motion, lab_scale, StepResult};
 use super::ransac::{find_essential_mat, RansacParams};
 use super::recover_pose::recover_pose;
-use crate::dataset::{dist3, position, PoseRow};
+use crate::dataset::PoseRow;
 use crate::matching::{match_all, Strategy};
 use crate::sift::{detect_and_compute, Features, SiftParams};
 use crate::{Error, GrayImage, Result};
@@ -94,39 +94,16 @@ impl MatchedOdometry {
     /// from frame 2 on, for the scale). On error the state is unchanged.
     pub fn step_features(&mut self, cur: Features, gt: Option<&PoseRow>) -> Result<StepResult> {
         let i = self.frame;
-        let mut res = StepResult {
-            frame: i,
-            position: [0.0; 3],
-            gt_position: gt.map(position),
-            rotation: self.r,
-            points_in: 0,
-            tracked: 0,
-            essential_inliers: 0,
-            ransac_iterations: 0,
-            pose_inliers: 0,
-            scale: None,
-            updated: false,
-            redetected: true,
-            points_out: cur.keypoints.len(),
-        };
+        let mut res = StepResult::start(i, gt, self.r);
+        res.redetected = true;
+        res.points_out = cur.keypoints.len();
         let Some(prev) = &self.prev else {
             self.prev = Some(cur);
             self.prev_gt = gt.copied();
             self.frame = 1;
             return Ok(res);
         };
-        let scale = if i >= 2 {
-            let (Some(p), Some(c)) = (self.prev_gt.as_ref(), gt) else {
-                return Err(Error::Odometry(format!(
-                    "frame {i} needs the ground-truth poses of frames {} and {i} for its scale \
-                     (poses/00.txt is missing lines)",
-                    i - 1
-                )));
-            };
-            Some(dist3(&position(p), &position(c)))
-        } else {
-            None
-        };
+        let scale = lab_scale(i, self.prev_gt.as_ref(), gt)?;
         let (refs, curs) = matched_points(&self.strategy, prev, &cur)
             .map_err(|e| Error::Odometry(format!("frame {i}: matching frame {} to {i}: {e}", i - 1)))?;
         res.points_in = prev.keypoints.len();
@@ -150,9 +127,7 @@ impl MatchedOdometry {
                     res.updated = true;
                 }
                 Some(s) if s > 0.1 => {
-                    let rt = mat_vec(&r, &pose.t);
-                    t = [t[0] + s * rt[0], t[1] + s * rt[1], t[2] + s * rt[2]];
-                    r = mat_mul(&pose.r, &r);
+                    apply_motion(&mut r, &mut t, &pose.r, &pose.t, s);
                     res.updated = true;
                 }
                 Some(_) => {}

@@ -56,6 +56,51 @@ pub struct StepResult {
     pub points_out: usize,
 }
 
+impl StepResult {
+    /// Frame `frame` before anything happened: the pose so far, no counts.
+    pub(crate) fn start(frame: usize, gt: Option<&PoseRow>, rotation: Mat3) -> StepResult {
+        StepResult {
+            frame,
+            position: [0.0; 3],
+            gt_position: gt.map(position),
+            rotation,
+            points_in: 0,
+            tracked: 0,
+            essential_inliers: 0,
+            ransac_iterations: 0,
+            pose_inliers: 0,
+            scale: None,
+            updated: false,
+            redetected: false,
+            points_out: 0,
+        }
+    }
+}
+
+/// The lab's scale for frame `i`: `math.dist` of the true positions of frames
+/// i−1 and i, from frame 2 on (frame 1 keeps recoverPose's unit translation).
+pub(crate) fn lab_scale(i: usize, prev_gt: Option<&PoseRow>, gt: Option<&PoseRow>) -> Result<Option<f64>> {
+    if i < 2 {
+        return Ok(None);
+    }
+    let (Some(prev), Some(cur)) = (prev_gt, gt) else {
+        return Err(Error::Odometry(format!(
+            "frame {i} needs the ground-truth poses of frames {} and {i} for its scale \
+             (poses/00.txt is missing lines)",
+            i - 1
+        )));
+    };
+    Ok(Some(dist3(&position(prev), &position(cur))))
+}
+
+/// The lab's update with a scale that passed its `> 0.1` test:
+/// t += s·R·t_rel, then R = R_rel·R.
+pub(crate) fn apply_motion(r: &mut Mat3, t: &mut Vec3, pose_r: &Mat3, pose_t: &Vec3, s: f64) {
+    let rt = mat_vec(r, pose_t);
+    *t = [t[0] + s * rt[0], t[1] + s * rt[1], t[2] + s * rt[2]];
+    *r = mat_mul(pose_r, r);
+}
+
 /// The lab's loop, one frame per [`Odometry::step`].
 pub struct Odometry {
     cam: Camera,
@@ -155,22 +200,7 @@ impl Odometry {
     ) -> Result<StepResult> {
         let i = self.frame;
         self.check_frame(img)?;
-        let gt_position = gt.map(position);
-        let mut res = StepResult {
-            frame: i,
-            position: [0.0; 3],
-            gt_position,
-            rotation: self.r,
-            points_in: 0,
-            tracked: 0,
-            essential_inliers: 0,
-            ransac_iterations: 0,
-            pose_inliers: 0,
-            scale: None,
-            updated: false,
-            redetected: false,
-            points_out: 0,
-        };
+        let mut res = StepResult::start(i, gt, self.r);
         let Some(last) = &self.last else {
             let refs = match detected {
                 Some(points) => points,
@@ -184,18 +214,7 @@ impl Odometry {
             self.frame = 1;
             return Ok(res);
         };
-        let scale = if i >= 2 {
-            let (Some(prev), Some(cur)) = (self.prev_gt.as_ref(), gt) else {
-                return Err(Error::Odometry(format!(
-                    "frame {i} needs the ground-truth poses of frames {} and {i} for its scale \
-                     (poses/00.txt is missing lines)",
-                    i - 1
-                )));
-            };
-            Some(dist3(&position(prev), &position(cur)))
-        } else {
-            None
-        };
+        let scale = lab_scale(i, self.prev_gt.as_ref(), gt)?;
 
         let Odometry { refs: prev_refs, cam, lk, ransac, .. } = self;
         let track = || -> Result<Tracked> {
@@ -245,9 +264,7 @@ impl Odometry {
             Some(s) => {
                 res.scale = Some(s);
                 if s > 0.1 {
-                    let rt = mat_vec(&r, &pose.t);
-                    t = [t[0] + s * rt[0], t[1] + s * rt[1], t[2] + s * rt[2]];
-                    r = mat_mul(&pose.r, &r);
+                    apply_motion(&mut r, &mut t, &pose.r, &pose.t, s);
                     res.updated = true;
                 }
                 if refs.len() < self.min_points {
