@@ -5,13 +5,13 @@
 //! theirs.
 
 use super::{expand_home, load_frame, parse_index, parse_threshold, sift_params, Cli};
+use crate::camera::Camera;
 use crate::dataset::{parse_poses, POSES_FILE};
 use crate::error::{Error, Result};
 use crate::matching::epipolar::{fundamental, judge, Verdicts};
 use crate::matching::{match_all, DMatch, Strategy};
 use crate::render::{encode_png, whole_frame};
 use crate::sift::detect_and_compute;
-use crate::vo::Camera;
 use clap::Args;
 use std::io::Write;
 use std::path::Path;

@@ -8,11 +8,11 @@
 //! current one's, E = [t]ₓR and F = K⁻ᵀ E K⁻¹, so x₂ᵀ F x₁ = 0 for a point
 //! seen at x₁ in the previous frame and x₂ in the current one.
 
+use crate::camera::Camera;
 use crate::dataset::PoseRow;
 use crate::error::{Error, Result};
 use crate::matching::DMatch;
 use crate::sift::KeyPoint;
-use crate::vo::Camera;
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
 /// The default correctness threshold: a match is correct when its Sampson

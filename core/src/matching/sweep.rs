@@ -255,9 +255,9 @@ mod tests {
     use super::super::epipolar::{fundamental, judge};
     use super::super::strategy::{match_all, Strategy};
     use super::*;
+    use crate::camera::Camera;
     use crate::dataset::parse_poses;
     use crate::sift::{detect_and_compute, SiftParams};
-    use crate::vo::Camera;
 
     fn frame(i: usize) -> Features {
         let path = format!("{}/../www/demo/MyKITTI/gray/00/image_0/{i:06}.png", env!("CARGO_MANIFEST_DIR"));

@@ -15,11 +15,11 @@
 //! Each frame's SIFT runs once and serves as the train set of one pair and
 //! the query set of the next.
 
-use super::camera::Camera;
 use super::linalg::{Mat3, Vec3, IDENTITY};
 use super::odometry::{apply_motion, lab_scale, StepResult};
 use super::ransac::{find_essential_mat, RansacParams};
 use super::recover_pose::recover_pose;
+use crate::camera::Camera;
 use crate::dataset::PoseRow;
 use crate::matching::{match_all, Strategy};
 use crate::sift::{detect_and_compute, Features, SiftParams};

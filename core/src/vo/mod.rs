@@ -10,7 +10,6 @@
 // Every unsafe operation sits in its own `unsafe` block with the reason it
 // holds, also inside `unsafe fn`s.
 
-mod camera;
 pub(crate) mod export;
 pub(crate) mod five_point;
 pub(crate) mod linalg;
@@ -23,7 +22,7 @@ pub(crate) mod recover_pose;
 #[cfg(test)]
 mod testing;
 
-pub use camera::Camera;
+pub use crate::camera::Camera;
 pub use export::{kitti_text, tum_text};
 pub use linalg::{det3, mat_mul, mat_vec, skew, transpose, Mat3, Vec3, IDENTITY};
 pub use lk::{calc_optical_flow_pyr_lk, LkParams, LkResult};

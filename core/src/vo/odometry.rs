@@ -11,11 +11,11 @@
 //!           ref = cur
 //! ```
 
-use super::camera::Camera;
 use super::linalg::{mat_mul, mat_vec, Mat3, Vec3, IDENTITY};
 use super::lk::{calc_optical_flow_pyr_lk_pyramids, LkParams, Pyramid};
 use super::ransac::{find_essential_mat, RansacParams};
 use super::recover_pose::recover_pose;
+use crate::camera::Camera;
 use crate::dataset::{dist3, position, PoseRow};
 use crate::sift::{detect, SiftParams};
 use crate::{Error, GrayImage, Result};

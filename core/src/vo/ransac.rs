@@ -5,9 +5,9 @@
 //! strict-greater model replacement and `RANSACUpdateNumIters`. No refinement:
 //! the result is the best minimal-sample model.
 
-use super::camera::Camera;
 use super::five_point::five_point;
 use super::linalg::{CvRng, Mat3};
+use crate::camera::Camera;
 use crate::{Error, Result};
 
 /// RANSAC settings of the lab's call.

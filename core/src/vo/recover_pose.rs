@@ -3,10 +3,10 @@
 //! candidates in OpenCV's order, DLT triangulation and the cheirality /
 //! distance (50) votes of every point (the lab passes no mask).
 
-use super::camera::Camera;
 #[cfg(test)]
 use super::linalg::null_vector_4x4;
 use super::linalg::{det3, mat_mul, null_vectors_4x4, svd, Mat3, Vec3};
+use crate::camera::Camera;
 use crate::{Error, Result};
 
 /// recoverPose's default `distanceThresh`.

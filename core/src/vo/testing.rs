@@ -2,8 +2,8 @@
 //! mirrors `lcg_scene` of testdata/gen_goldens.py, so the goldens written
 //! there by OpenCV are for exactly these points.
 
-use super::camera::Camera;
 use super::linalg::{mat_mul, skew, Mat3};
+use crate::camera::Camera;
 
 /// Rotation from a rotation vector (Rodrigues).
 pub fn rodrigues(w: [f64; 3]) -> Mat3 {
