@@ -7,12 +7,14 @@
 //! for the baseline ISA, so every operation here is a plain f64 operation
 //! (no FMA).
 
+mod hypot;
 mod lu;
 mod mat3;
 mod poly;
 mod svd;
 
 pub use crate::rng::CvRng;
+pub use hypot::hypot;
 pub use lu::lu_inverse;
 pub use mat3::{det3, mat_mul, mat_vec, skew, transpose, Mat3, Vec3, IDENTITY};
 pub use poly::solve_poly;

@@ -63,7 +63,7 @@ fn jacobi_impl(at: &mut [f64], m: usize, n: usize, n1: usize, w: &mut [f64], vt:
                 }
                 p *= 2.0;
                 let beta = a - b;
-                let gamma = p.hypot(beta);
+                let gamma = super::hypot(p, beta);
                 let (c, s);
                 if beta < 0.0 {
                     let delta = (gamma - beta) * 0.5;
@@ -243,7 +243,7 @@ pub fn null_vector_4x4(a: &[[f64; 4]; 4]) -> [f64; 4] {
 /// `hypot` included). With AVX2 the four run as the lanes of f64 vectors.
 pub fn null_vectors_4x4(ms: &[[[f64; 4]; 4]; 4]) -> [[f64; 4]; 4] {
     #[cfg(target_arch = "x86_64")]
-    if crate::simd::avx2() && x86::libm_hypot_is_glibcs() {
+    if crate::simd::avx2() {
         // SAFETY: the CPU has AVX2, the only feature the function enables.
         return unsafe { x86::null_vectors_avx2(ms) };
     }
