@@ -32,6 +32,7 @@ pub(crate) mod extrema;
 pub(crate) mod image;
 pub(crate) mod initial;
 pub(crate) mod keypoint;
+pub(crate) mod lanes;
 pub(crate) mod num;
 pub(crate) mod order;
 pub(crate) mod orientation;

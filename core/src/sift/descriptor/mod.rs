@@ -5,18 +5,15 @@
 //! This file is the algorithm in OpenCV's order and the dispatch: the window's
 //! samples, the trilinear histogram (OpenCV's SIMD body and its scalar tail),
 //! the fold and the normalisation. The vector kernels for the sample rows and
-//! the SIMD body live beside it, in `x86.rs` (AVX2, AVX-512) and `wasm.rs`
-//! (SIMD128), with the same operations per lane.
+//! the SIMD body live beside it, in `vector.rs` (one form for AVX-512, AVX2
+//! and SIMD128), with the same operations per lane.
 
 use super::image::Plane;
 use super::keypoint::KeyPoint;
 use super::num::{floor, fma, gradient_samples, rne, FLT_EPSILON};
 use super::params::SiftParams;
 
-#[cfg(target_arch = "wasm32")]
-mod wasm;
-#[cfg(target_arch = "x86_64")]
-mod x86;
+mod vector;
 
 // §SIFT-1: 4×4 cells of 8 bins, window factor 3, clip at 0.2, scale 512.
 pub(super) const D: usize = 4; // SIFT_DESCR_WIDTH
@@ -197,23 +194,15 @@ fn collect_samples(img: &Plane, px: i64, py: i64, radius: i64, cos_t: f32, sin_t
         let (row, up, down) = (img.row(r), img.row(r - 1), img.row(r + 1));
         let c0 = (px + j0) as usize;
         let n = (j1 - j0 + 1) as usize;
-        #[cfg(target_arch = "x86_64")]
-        let done = if crate::simd::avx512f() {
-            // SAFETY: the CPU has AVX-512 F; columns c0-1 ..= c0+n of the
-            // three rows exist (1 <= c0, c0+n <= cols-1), and every vector of
-            // `s` has room for the whole (2r+1)² square.
-            unsafe { x86::sample_row(&mut s, [row, up, down], c0, n, j0 as f32, [cos_t, sin_t, a, b], exp_scale) };
-            continue;
-        } else if crate::simd::avx2_fma() {
-            // SAFETY: as above, with AVX2 and FMA.
-            unsafe { x86::sample_row_avx2(&mut s, [row, up, down], c0, n, j0 as f32, [cos_t, sin_t, a, b], exp_scale) }
-        } else {
-            0
-        };
-        #[cfg(target_arch = "wasm32")]
-        let done = wasm::sample_row(&mut s, [row, up, down], c0, n, j0 as f32, [cos_t, sin_t, a, b], exp_scale);
-        #[cfg(not(any(target_arch = "x86_64", target_arch = "wasm32")))]
-        let done = 0;
+        let done = super::lanes::run(&mut vector::SampleRow {
+            s: &mut s,
+            rows: [row, up, down],
+            c0,
+            n,
+            j0: j0 as f32,
+            rot: [cos_t, sin_t, a, b],
+            exp_scale,
+        });
         for t in done..n {
             let fj = (j0 + t as i64) as f32;
             let c_rot = fma(fj, cos_t, a);
@@ -261,25 +250,7 @@ fn sample_columns(i: i64, radius: i64, cos_t: f32, sin_t: f32) -> Option<(i64, i
 /// arithmetic where the CPU allows; returns how many it did.
 #[inline(always)]
 fn accumulate_simd_body(s: &Rows, simd_len: usize, ori: f32, hist: &mut [f32; HIST_LEN]) -> usize {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if crate::simd::avx512f() {
-            // SAFETY: the CPU has AVX-512 F; all rows hold at least simd_len
-            // values (one per sample).
-            return unsafe { x86::accumulate(s, simd_len, ori, hist) };
-        }
-        if crate::simd::avx2() {
-            // SAFETY: the CPU has AVX2.
-            return unsafe { x86::accumulate_avx2(s, simd_len, ori, hist) };
-        }
-    }
-    #[cfg(target_arch = "wasm32")]
-    return wasm::accumulate(s, simd_len, ori, hist);
-    #[cfg(not(target_arch = "wasm32"))]
-    {
-        let _ = (s, simd_len, ori, hist);
-        0
-    }
+    super::lanes::run(&mut vector::Accumulate { s, len: simd_len, ori, hist })
 }
 
 /// Clip at 0.2 of the norm, renormalise to 512 and round (§SIFT-11): OpenCV's

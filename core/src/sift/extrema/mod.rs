@@ -5,8 +5,8 @@
 //! order; this stage knows nothing of what follows it.
 //!
 //! This file is the scan in OpenCV's order and the dispatch; the vector forms
-//! of the DoG rows and of the 26-neighbour test live beside it, in `x86.rs`
-//! (AVX2, AVX-512) and `wasm.rs` (SIMD128).
+//! live beside it: the 26-neighbour test once for every width in `vector.rs`,
+//! the DoG rows with AVX2 in `x86.rs`.
 
 use super::anatomy::Observer;
 use super::image::Plane;
@@ -14,8 +14,7 @@ use super::keypoint::Refined;
 use super::params::SiftParams;
 
 mod refine;
-#[cfg(target_arch = "wasm32")]
-mod wasm;
+mod vector;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
@@ -194,12 +193,14 @@ fn row_extrema_generic(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize
 
 /// Scratch rows of the separable test (per-column maximum and minimum).
 #[derive(Default)]
-#[cfg_attr(not(any(target_arch = "x86_64", target_arch = "wasm32")), allow(dead_code))]
 struct ColumnExtremes {
     max: Vec<f32>,
     min: Vec<f32>,
 }
 
+/// The 26-neighbour test of one scan row: vectors where the target has
+/// them and the rows have a pixel on each side of `cols`, then the scalar
+/// test on the columns left.
 fn row_extrema(
     rows: &[&[f32]; 9],
     thr: f32,
@@ -207,27 +208,12 @@ fn row_extrema(
     out: &mut Vec<usize>,
     scratch: &mut ColumnExtremes,
 ) {
-    #[cfg(target_arch = "x86_64")]
+    let mut done = cols.start;
     if rows.iter().all(|r| r.len() > cols.end) && cols.start >= 1 {
-        let done = if crate::simd::avx512f() {
-            // SAFETY: the CPU has AVX-512 F, and every row has a pixel on
-            // each side of `cols` (checked above).
-            unsafe { x86::row_extrema_avx512(rows, thr, cols.clone(), out, &mut scratch.max, &mut scratch.min) }
-        } else if crate::simd::avx2() {
-            // SAFETY: the CPU has AVX2; the rows as above.
-            unsafe { x86::row_extrema_avx2_separable(rows, thr, cols.clone(), out, &mut scratch.max, &mut scratch.min) }
-        } else {
-            cols.start
-        };
-        return row_extrema_generic(rows, thr, done..cols.end, out);
+        let mut k = vector::RowExtrema { rows, thr, cols: cols.clone(), out, scratch, columns_done: false };
+        done += super::lanes::run(&mut k);
     }
-    #[cfg(target_arch = "wasm32")]
-    if rows.iter().all(|r| r.len() > cols.end) && cols.start >= 1 {
-        let done = wasm::row_extrema_simd128(rows, thr, cols.clone(), out, &mut scratch.max, &mut scratch.min);
-        return row_extrema_generic(rows, thr, done..cols.end, out);
-    }
-    let _ = scratch;
-    row_extrema_generic(rows, thr, cols, out)
+    row_extrema_generic(rows, thr, done..cols.end, out)
 }
 
 #[cfg(test)]

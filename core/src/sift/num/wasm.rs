@@ -96,7 +96,6 @@ macro_rules! dispatch_fma4 {
         }
     };
 }
-pub(crate) use dispatch_fma4;
 
 /// `fast_atan2_deg` lane by lane; the three branches become selects.
 #[inline(always)]
