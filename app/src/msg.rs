@@ -98,12 +98,13 @@ pub enum FromWorker {
     Inside(crate::msg_inside::InsideReply),
 }
 
-fn set(o: &Object, k: &str, v: &JsValue) {
+// `set` and `get` serve `msg_inside` too.
+pub(crate) fn set(o: &Object, k: &str, v: &JsValue) {
     // Setting a property on a fresh plain object cannot fail.
     let _ = Reflect::set(o, &JsValue::from_str(k), v);
 }
 
-fn get(o: &JsValue, k: &str) -> Result<JsValue, String> {
+pub(crate) fn get(o: &JsValue, k: &str) -> Result<JsValue, String> {
     Reflect::get(o, &JsValue::from_str(k)).map_err(|_| format!("message has no field {k}"))
 }
 
@@ -183,6 +184,15 @@ fn get_points(o: &JsValue, k: &str) -> Result<Option<Vec<[f32; 2]>>, String> {
     points_field(k, &flat).map(Some)
 }
 
+/// The fields of a job on one image at OpenCV SIMD width `lanes`: SIFT's
+/// (`ToWorker::Sift`) and its anatomy's (`InsideRequest::Anatomy`).
+pub(crate) fn set_image_job(o: &Object, kind: &str, id: u32, bytes: &[u8], lanes: u32) {
+    set(o, "type", &kind.into());
+    set(o, "id", &id.into());
+    set(o, "lanes", &lanes.into());
+    set(o, "bytes", &Uint8Array::from(bytes).into());
+}
+
 fn kind(o: &JsValue) -> Result<String, String> {
     get_str(o, "type")
 }
@@ -191,12 +201,7 @@ impl ToWorker {
     pub fn to_js(&self) -> JsValue {
         let o = Object::new();
         match self {
-            ToWorker::Sift { id, bytes, lanes } => {
-                set(&o, "type", &"sift".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "lanes", &(*lanes).into());
-                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
-            }
+            ToWorker::Sift { id, bytes, lanes } => set_image_job(&o, "sift", *id, bytes, *lanes),
             ToWorker::Detect { frame, bytes } => {
                 set(&o, "type", &"detect".into());
                 set(&o, "frame", &(*frame).into());

@@ -2,7 +2,8 @@
 //! of one frame, and the whole-frame sweep of a pair. Like `msg.rs`, plain
 //! objects whose bulk travels as typed arrays, typed on both sides.
 
-use js_sys::{Array, Float32Array, Float64Array, Int32Array, Object, Reflect, Uint32Array, Uint8Array};
+use crate::msg::{get, set, set_image_job};
+use js_sys::{Array, Float32Array, Float64Array, Int32Array, Object, Uint32Array, Uint8Array};
 use siftlab_core::dataset::PoseRow;
 use siftlab_core::matching::sweep::{Curve, Sweep};
 use siftlab_core::matching::StrategyKind;
@@ -75,15 +76,6 @@ pub enum InsideReply {
     WholeFrame { id: u32, data: Box<SweepData> },
 }
 
-fn set(o: &Object, k: &str, v: &JsValue) {
-    // Setting a property on a fresh plain object cannot fail.
-    let _ = Reflect::set(o, &JsValue::from_str(k), v);
-}
-
-fn get(o: &JsValue, k: &str) -> Result<JsValue, String> {
-    Reflect::get(o, &JsValue::from_str(k)).map_err(|_| format!("message has no field {k}"))
-}
-
 fn num(o: &JsValue, k: &str) -> Result<f64, String> {
     get(o, k)?.as_f64().ok_or_else(|| format!("message field {k} is not a number"))
 }
@@ -141,12 +133,7 @@ impl InsideRequest {
     pub fn to_js(&self) -> JsValue {
         let o = Object::new();
         match self {
-            InsideRequest::Anatomy { id, bytes, lanes } => {
-                set(&o, "type", &"anatomy".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "lanes", &(*lanes).into());
-                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
-            }
+            InsideRequest::Anatomy { id, bytes, lanes } => set_image_job(&o, "anatomy", *id, bytes, *lanes),
             InsideRequest::WholeFrame { id, prev, cur, poses, px } => {
                 set(&o, "type", &"wholeFrame".into());
                 set(&o, "id", &(*id).into());

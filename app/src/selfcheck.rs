@@ -76,10 +76,13 @@ fn dist_exact(v: &Py, want: f32) -> bool {
 /// Whether the student's answer is this `MatchInfo`, value for value.
 fn same(a: &Answer, m: &MatchInfo) -> bool {
     point_eq(&a.query, m.query)
-        && a.points.len() == m.points.len()
-        && a.points.iter().zip(&m.points).all(|(p, &w)| point_eq(p, w))
-        && a.distances.len() == m.distances.len()
-        && a.distances.iter().zip(&m.distances).all(|(d, &w)| dist_value_eq(d, w))
+        && list_eq(&a.points, &m.points, |p, w| point_eq(p, w))
+        && list_eq(&a.distances, &m.distances, |d, w| dist_value_eq(d, w))
+}
+
+/// `got` is `want` element for element.
+fn list_eq<G, W: Copy>(got: &[G], want: &[W], eq: impl Fn(&G, W) -> bool) -> bool {
+    got.len() == want.len() && got.iter().zip(want).all(|(g, &w)| eq(g, w))
 }
 
 fn has_float_coords(p: &[&Py]) -> bool {
@@ -126,13 +129,31 @@ fn check_query(a: &Answer, truth: &MatchInfo, query_float: Option<(f32, f32)>) -
     FieldCheck { field, ok: false, note }
 }
 
-fn check_points(a: &Answer, truth: &MatchInfo) -> FieldCheck {
-    let field = "matched points";
-    let want = &truth.points;
-    if a.points.len() == want.len() && a.points.iter().zip(want).all(|(p, &w)| point_eq(p, w)) {
-        return FieldCheck { field, ok: true, note: format!("{} point(s) ✓", want.len()) };
+/// A list field's check: right when `got` is `want` element for element
+/// (`eq`; the note counts the `noun`s), else with `mistake`'s note.
+fn check_list<G, W: Copy>(
+    field: &'static str,
+    noun: &str,
+    got: &[G],
+    want: &[W],
+    eq: impl Fn(&G, W) -> bool,
+    mistake: impl FnOnce() -> String,
+) -> FieldCheck {
+    if list_eq(got, want, eq) {
+        FieldCheck { field, ok: true, note: format!("{} {noun}(s) ✓", want.len()) }
+    } else {
+        FieldCheck { field, ok: false, note: mistake() }
     }
-    let note = if a.points.len() != want.len() {
+}
+
+fn check_points(a: &Answer, truth: &MatchInfo) -> FieldCheck {
+    let mistake = || points_mistake(a, &truth.points);
+    check_list("matched points", "point", &a.points, &truth.points, |p, w| point_eq(p, w), mistake)
+}
+
+/// What is wrong with matched points that are not `want`.
+fn points_mistake(a: &Answer, want: &[(i64, i64)]) -> String {
+    if a.points.len() != want.len() {
         let mut n = format!("{} point(s), expected {}", a.points.len(), want.len());
         if a.points.len() == 100 && want.len() > 100 {
             n.push_str(" — exactly 100: knnMatch with k=100 truncates dt; ask for all neighbours");
@@ -161,17 +182,17 @@ fn check_points(a: &Answer, truth: &MatchInfo) -> FieldCheck {
                 want[i].1
             )
         }
-    };
-    FieldCheck { field, ok: false, note }
+    }
 }
 
 fn check_distances(a: &Answer, truth: &MatchInfo) -> FieldCheck {
-    let field = "distances";
-    let want = &truth.distances;
-    if a.distances.len() == want.len() && a.distances.iter().zip(want).all(|(d, &w)| dist_exact(d, w)) {
-        return FieldCheck { field, ok: true, note: format!("{} distance(s) ✓", want.len()) };
-    }
-    let note = if a.distances.len() != want.len() {
+    let mistake = || distances_mistake(a, &truth.distances);
+    check_list("distances", "distance", &a.distances, &truth.distances, |d, w| dist_exact(d, w), mistake)
+}
+
+/// What is wrong with distances that are not `want` as the lab prints them.
+fn distances_mistake(a: &Answer, want: &[f32]) -> String {
+    if a.distances.len() != want.len() {
         format!("{} distance(s), expected {}", a.distances.len(), want.len())
     } else if a.distances.iter().zip(want).all(|(d, &w)| dist_value_eq(d, w)) {
         let i = a.distances.iter().zip(want).position(|(d, &w)| !dist_exact(d, w)).unwrap_or(0);
@@ -204,8 +225,7 @@ fn check_distances(a: &Answer, truth: &MatchInfo) -> FieldCheck {
             a.distances[i].number().map(|x| x.to_string()).unwrap_or_else(|| "not a number".into()),
             py_f32(want[i])
         )
-    };
-    FieldCheck { field, ok: false, note }
+    }
 }
 
 /// Diagnoses `answer` against the core's `truth` and its `mistakes` (from

@@ -35,22 +35,15 @@ fn replay(target: &str, check: fn(&[u8])) {
     }
 }
 
-#[test]
-fn png_diff() {
-    replay("png_diff", checks::png_diff);
+/// One test per fuzz target, each replaying that target's folder through the
+/// check of the same name.
+macro_rules! replay_tests {
+    ($($target:ident),*) => {$(
+        #[test]
+        fn $target() {
+            replay(stringify!($target), checks::$target);
+        }
+    )*};
 }
 
-#[test]
-fn sift() {
-    replay("sift", checks::sift);
-}
-
-#[test]
-fn matching() {
-    replay("matching", checks::matching);
-}
-
-#[test]
-fn poses() {
-    replay("poses", checks::poses);
-}
+replay_tests!(png_diff, sift, matching, poses);

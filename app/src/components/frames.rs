@@ -2,6 +2,7 @@
 //! selected keypoint (scale and orientation), lines to its matches, and the
 //! green `view_info` circles at the `matching_info` coordinates.
 
+use super::Legend;
 use crate::client::Frame;
 use crate::plot::{key_step, keypoint_path, orientation, step_feature, to_composite};
 use crate::state::{nearest_keypoint, Lab, Which};
@@ -11,6 +12,13 @@ use wasm_bindgen::{Clamped, JsCast};
 /// Colours of successive match lines (drawMatchesKnn picks random ones; these
 /// stay readable on gray).
 const PALETTE: [&str; 6] = ["#ff5a36", "#2f9bff", "#ffcc00", "#c04dff", "#00d1b2", "#ff7ac6"];
+
+/// The frames' legend: swatch class and label.
+const LEGEND: &[(&str, &str)] = &[
+    ("sw-sel", " selected keypoint (circle = scale, line = orientation) "),
+    ("sw-line", " lines to its matches (drawMatchesKnn) "),
+    ("sw-info", " matching_info points (view_info) · "),
+];
 
 /// Where the frames sit in the composite: the previous frame at (0, 0), the
 /// current one at (`dx`, `dy`); `w`×`h` in all.
@@ -174,12 +182,7 @@ pub fn FramesView() -> impl IntoView {
         <section class="card frames" aria-label="Frames">
             <div class="frames-head">
                 <h2>"3 · The two frames"</h2>
-                <p class="muted legend">
-                    <span class="sw sw-sel"></span>" selected keypoint (circle = scale, line = orientation) "
-                    <span class="sw sw-line"></span>" lines to its matches (drawMatchesKnn) "
-                    <span class="sw sw-info"></span>" matching_info points (view_info) · "
-                    "click the previous frame to pick the nearest keypoint"
-                </p>
+                <Legend swatches=LEGEND tail="click the previous frame to pick the nearest keypoint"/>
             </div>
             <div class="frames-labels muted">
                 <span>

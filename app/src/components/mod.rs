@@ -169,3 +169,14 @@ pub fn App() -> impl IntoView {
     });
     view! { <Explorer lab=lab/> }
 }
+
+/// A figure's legend: colour swatches (each an `sw` span with its own class,
+/// then its label) and a closing remark.
+#[component]
+fn Legend(swatches: &'static [(&'static str, &'static str)], tail: &'static str) -> impl IntoView {
+    let swatches = swatches
+        .iter()
+        .map(|&(class, label)| view! { <span class=format!("sw {class}")></span>{label} })
+        .collect_view();
+    view! { <p class="muted legend">{swatches}{tail}</p> }
+}

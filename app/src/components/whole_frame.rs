@@ -6,6 +6,7 @@
 //! worker (the core's `matching::sweep`); thresholds then cost a binary search.
 
 use super::canvas2d::{context, put_rgba};
+use super::Legend;
 use crate::client::Frame;
 use crate::loading;
 use crate::msg::FromWorker;
@@ -23,6 +24,10 @@ use std::sync::Arc;
 /// At most this many lines are drawn (the lowest keys first): dt near 500
 /// has hundreds of thousands of candidates, which would paint the frames over.
 const MAX_LINES: usize = 20_000;
+
+/// The judged lines' legend: swatch class and label.
+const LEGEND: &[(&str, &str)] =
+    &[("sw-correct", " correct "), ("sw-wrong", " wrong "), ("sw-unjudged", " not judged (no poses) · ")];
 
 /// The curves in the lab's order (their colours are the CSS classes `curve-dt` …).
 const CURVE_COLOURS: [(StrategyKind, &str); 3] =
@@ -164,12 +169,7 @@ pub fn WholeFrameView() -> impl IntoView {
             </div>
             {move || error.get().map(|e| view! { <p class="error" role="alert">{e}</p> })}
             {counts}
-            <p class="muted legend">
-                <span class="sw sw-correct"></span>" correct "
-                <span class="sw sw-wrong"></span>" wrong "
-                <span class="sw sw-unjudged"></span>" not judged (no poses) · "
-                "the strategy and threshold are the ones chosen above"
-            </p>
+            <Legend swatches=LEGEND tail="the strategy and threshold are the ones chosen above"/>
             <div class="stage"><canvas node_ref=canvas_ref data-testid="wf-canvas"></canvas></div>
             <TradeoffChart swept=swept/>
         </div>

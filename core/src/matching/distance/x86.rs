@@ -31,6 +31,22 @@ unsafe fn load_u8x32_as_i16(p: *const u8) -> __m512i {
     _mm512_cvtepu8_epi16(unsafe { _mm256_loadu_si256(p as *const __m256i) })
 }
 
+/// The one-query kernels' outer loop: four train rows a step, `sums4` giving
+/// their exact i32 sums of squared differences, stored as distances; the
+/// rows left over go the generic way. The kernels differ only in `sums4`.
+/// (Inlined into each kernel, so it runs with the kernel's features.)
+#[inline(always)]
+fn by_fours(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32], sums4: impl Fn(&[[u8; 128]]) -> __m128i) {
+    let mut t4 = train.chunks_exact(4);
+    let mut o4 = out.chunks_exact_mut(4);
+    for (t, o) in (&mut t4).zip(&mut o4) {
+        let s = sums4(t);
+        // SAFETY: `o` is a chunk of 4 f32; an unaligned store.
+        unsafe { _mm_storeu_ps(o.as_mut_ptr(), _mm_sqrt_ps(_mm_cvtepi32_ps(s))) };
+    }
+    super::row_generic(q, t4.remainder(), o4.into_remainder());
+}
+
 /// One AVX-512 row kernel per way of accumulating `d * d` pairs: the
 /// query stays in four registers as i16, each train row is four loads.
 macro_rules! avx512_row_kernel {
@@ -59,14 +75,7 @@ macro_rules! avx512_row_kernel {
                 }
                 $acc
             };
-            let mut t4 = train.chunks_exact(4);
-            let mut o4 = out.chunks_exact_mut(4);
-            for (t, o) in (&mut t4).zip(&mut o4) {
-                let s = hsum4_512(row(&t[0]), row(&t[1]), row(&t[2]), row(&t[3]));
-                // SAFETY: `o` is a chunk of 4 f32; an unaligned store.
-                unsafe { _mm_storeu_ps(o.as_mut_ptr(), _mm_sqrt_ps(_mm_cvtepi32_ps(s))) };
-            }
-            super::row_generic(q, t4.remainder(), o4.into_remainder());
+            by_fours(q, train, out, |t| hsum4_512(row(&t[0]), row(&t[1]), row(&t[2]), row(&t[3])));
         }
     };
 }
@@ -221,12 +230,5 @@ pub(super) fn row_avx2(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
         }
         acc
     };
-    let mut t4 = train.chunks_exact(4);
-    let mut o4 = out.chunks_exact_mut(4);
-    for (t, o) in (&mut t4).zip(&mut o4) {
-        let s = hsum4_256(row(&t[0]), row(&t[1]), row(&t[2]), row(&t[3]));
-        // SAFETY: `o` is a chunk of 4 f32; an unaligned store.
-        unsafe { _mm_storeu_ps(o.as_mut_ptr(), _mm_sqrt_ps(_mm_cvtepi32_ps(s))) };
-    }
-    super::row_generic(q, t4.remainder(), o4.into_remainder());
+    by_fours(q, train, out, |t| hsum4_256(row(&t[0]), row(&t[1]), row(&t[2]), row(&t[3])));
 }

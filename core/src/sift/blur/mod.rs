@@ -230,6 +230,18 @@ fn blocks(w: usize, b: usize) -> (impl Iterator<Item = usize>, usize) {
     ((0..whole).map(move |i| i * b).chain(last), if w < b { 0 } else { w })
 }
 
+/// The blocks of the generic passes over a row of `w` pixels: blocks of `b`
+/// ([`blocks`]), or, in a row narrower than `b`, blocks of [`SMALL_BLOCK`]
+/// (at most one of the two iterators yields); and where the pixel-by-pixel
+/// rest starts.
+#[inline(always)]
+fn two_block_sizes(w: usize, b: usize) -> (impl Iterator<Item = usize>, impl Iterator<Item = usize>, usize) {
+    let (big, x) = blocks(w, b);
+    // Blocks of `b` cover the row: no small blocks (those of an empty row).
+    let (small, rest) = blocks(if x == 0 { w } else { 0 }, SMALL_BLOCK);
+    (big, small, if x == 0 { rest } else { x })
+}
+
 #[inline(always)]
 fn row_block<const B: usize>(src: &[f32], kx: &[f32], dst: &mut [f32], fma: &impl Fn(f32, f32, f32) -> f32) {
     let mut acc = [0f32; B];
@@ -251,17 +263,12 @@ fn accumulate_row_generic<const B: usize>(
     dst: &mut [f32],
     fma: impl Fn(f32, f32, f32) -> f32,
 ) {
-    let w = dst.len();
-    let (starts, mut x) = blocks(w, B);
-    for x in starts {
+    let (big, small, x) = two_block_sizes(dst.len(), B);
+    for x in big {
         row_block::<B>(&padded[x..], kx, &mut dst[x..], &fma);
     }
-    if x == 0 {
-        let (starts, rest) = blocks(w, SMALL_BLOCK);
-        for x in starts {
-            row_block::<SMALL_BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
-        }
-        x = rest;
+    for x in small {
+        row_block::<SMALL_BLOCK>(&padded[x..], kx, &mut dst[x..], &fma);
     }
     for (i, d) in dst.iter_mut().enumerate().skip(x) {
         let mut a = padded[i] * kx[0];
@@ -302,19 +309,14 @@ fn accumulate_column_generic(
     dst: &mut [f32],
     fma: impl Fn(f32, f32, f32) -> f32,
 ) {
-    let w = dst.len();
-    let (starts, mut x) = blocks(w, BLOCK);
-    for x in starts {
+    let (big, small, x) = two_block_sizes(dst.len(), BLOCK);
+    for x in big {
         column_block::<BLOCK>(x, centre, pairs, ky, dst, &fma);
     }
-    if x == 0 {
-        let (starts, rest) = blocks(w, SMALL_BLOCK);
-        for x in starts {
-            column_block::<SMALL_BLOCK>(x, centre, pairs, ky, dst, &fma);
-        }
-        x = rest;
+    for x in small {
+        column_block::<SMALL_BLOCK>(x, centre, pairs, ky, dst, &fma);
     }
-    for i in x..w {
+    for i in x..dst.len() {
         let mut a = centre[i] * ky[0];
         for (k, (up, down)) in pairs.iter().enumerate() {
             a = fma(up[i] + down[i], ky[k + 1], a);
@@ -427,6 +429,17 @@ mod tests {
         assert_eq!(run(4, 4), (vec![0], 4));
         assert_eq!(run(3, 4), (vec![], 0));
         assert_eq!(run(2482, 64), ((0..38).map(|i| i * 64).chain([2418]).collect(), 2482));
+    }
+
+    #[test]
+    fn narrow_rows_take_small_blocks() {
+        let run = |w, b| {
+            let (big, small, rest) = two_block_sizes(w, b);
+            (big.collect::<Vec<_>>(), small.collect::<Vec<_>>(), rest)
+        };
+        assert_eq!(run(100, 64), (vec![0, 36], vec![], 100));
+        assert_eq!(run(40, 64), (vec![], vec![0, 16, 24], 40));
+        assert_eq!(run(10, 64), (vec![], vec![], 0));
     }
 
     #[test]

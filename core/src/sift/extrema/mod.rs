@@ -79,7 +79,7 @@ pub fn scan_octave(
             row_extrema(&rows, threshold, IMG_BORDER..w - IMG_BORDER, &mut candidates, &mut scratch);
             for &c in &candidates {
                 watch.extremum(o, layer, r, c);
-                match refine::adjust_local_extremum(levels, o, layer, r, c, p) {
+                match refine::adjust_local_extremum(levels, refine::Candidate { o, layer, r, c }, p) {
                     Ok(refined) => sink(refined),
                     Err(why) => watch.rejected(o, layer, r, c, why),
                 }

@@ -104,32 +104,29 @@ fn solve_offsets(g: &Derivs) -> (f32, f32, f32) {
     (-x0, -x1, -x2)
 }
 
+/// Where the scan found an extremum: octave `o`, DoG layer, row and column
+/// (the refinement's wrapper and body take it whole).
+#[derive(Clone, Copy)]
+pub(super) struct Candidate {
+    pub o: usize,
+    pub layer: usize,
+    pub r: usize,
+    pub c: usize,
+}
+
 /// `adjustLocalExtrema`: up to five Newton steps, then the contrast and
 /// edge tests, or why OpenCV rejects the candidate (the plain pipeline
 /// ignores the reason; the anatomy view counts it).
 ///
 /// Compiled with FMA where the CPU has it: its two dozen `fma`s and
 /// roundings were calls to `fmaf` and `rintf` otherwise.
-pub(super) fn adjust_local_extremum(
-    levels: &[Plane],
-    o: usize,
-    layer0: usize,
-    r0: usize,
-    c0: usize,
-    p: &SiftParams,
-) -> Result<Refined, Rejection> {
-    crate::with_hw_fma!(Result<Refined, Rejection>, refine(levels, o, layer0, r0, c0, p))
+pub(super) fn adjust_local_extremum(levels: &[Plane], at: Candidate, p: &SiftParams) -> Result<Refined, Rejection> {
+    crate::with_hw_fma!(Result<Refined, Rejection>, refine(levels, at, p))
 }
 
 #[inline(always)]
-fn refine(
-    levels: &[Plane],
-    o: usize,
-    layer0: usize,
-    r0: usize,
-    c0: usize,
-    p: &SiftParams,
-) -> Result<Refined, Rejection> {
+fn refine(levels: &[Plane], at: Candidate, p: &SiftParams) -> Result<Refined, Rejection> {
+    let Candidate { o, layer: layer0, r: r0, c: c0 } = at;
     let nl = p.n_octave_layers;
     let (w, h) = (levels[0].width as i64, levels[0].height as i64);
     let border = IMG_BORDER as i64;

@@ -3,8 +3,9 @@
 (opencv-contrib-python-headless==4.8.0.76, numpy<2).
 
 Writes lk_prev.png / lk_next.png (a synthetic 320x240 pair: blurred noise and
-its sub-pixel shift) and prints Rust literals for lk.rs (calcOpticalFlowPyrLK),
-five_point/ransac/recover_pose tests (findEssentialMat, recoverPose).
+its sub-pixel shift) and five_point_golden.txt (findEssentialMat on 5 points),
+and prints Rust literals for lk.rs (calcOpticalFlowPyrLK) and the
+ransac/recover_pose tests (findEssentialMat, recoverPose).
 """
 import os
 import sys
@@ -67,18 +68,31 @@ def skew(v): return np.array([[0,-v[2],v[1]],[v[2],0,-v[0]],[-v[1],v[0],0]])
 cases=[([0.02,-0.05,0.01],[0.1,0.05,-1.0],11),([-0.1,0.2,0.05],[1.0,-0.2,0.3],12),([0.3,0.1,-0.2],[-0.4,0.8,0.5],13),([0.001,0.004,-0.002],[0.01,-0.02,1.0],14)]
 
 
+FIVE_POINT_HEADER = """\
+# Five-point goldens for vo/five_point.rs, written by gen_goldens.py: synthetic
+# scenes (X2 = R·X1 + t, depths 5-25) and cv2.findEssentialMat(p1, p2, focal=1.0,
+# pp=(0, 0), method=cv2.RANSAC) with exactly 5 points (4.8.0.76 wheel). One case
+# a paragraph: the scene's rvec and t, the points p1 and p2 (x y x y ...), then
+# every solution E of OpenCV's kernel in order, row-major.
+"""
+
+
 def five_point():
-    print("// five-point goldens")
+    """Writes five_point_golden.txt: a data file rather than Rust literals, so
+    the numbers stay one line a row (repr: the test parses the same f64s)."""
+    def row(key, values):
+        return key + " " + " ".join(repr(float(v)) for v in values)
+    paragraphs = []
     for w, t, seed in cases:
         R = rodrigues(w)
         a, b = scene(R, t, 5, seed)
         E, mask = cv2.findEssentialMat(a, b, focal=1.0, pp=(0., 0.), method=cv2.RANSAC, prob=0.999, threshold=1.0)
         k = E.shape[0] // 3
-        print("FivePointCase { rvec: %r, t: %r," % (w, t))
-        print("  p1: [%s]," % ", ".join("[%r, %r]" % (float(x), float(y)) for x, y in a))
-        print("  p2: [%s]," % ", ".join("[%r, %r]" % (float(x), float(y)) for x, y in b))
-        print("  opencv: &[%s] }," % ", ".join(
-            "[%s]" % ", ".join(repr(float(v)) for v in E[3 * i:3 * i + 3].ravel()) for i in range(k)))
+        lines = [row("rvec", w), row("t", t), row("p1", a.ravel()), row("p2", b.ravel())]
+        lines += [row("E", E[3 * i:3 * i + 3].ravel()) for i in range(k)]
+        paragraphs.append("\n".join(lines) + "\n")
+    with open(os.path.join(HERE, "five_point_golden.txt"), "w", encoding="utf-8") as f:
+        f.write(FIVE_POINT_HEADER + "\n".join(paragraphs))
 
 
 # ---- RANSAC: pixel points of a scene with 60 outliers, KITTI intrinsics ----

@@ -143,8 +143,10 @@ fn mismatch(d: &Win, gx: &Win, gy: &Win) -> (f32, f32) {
 /// the same bits.
 pub(super) trait Kernels {
     /// The template and gradient windows of one point at one level.
-    type Patch;
-    fn new_patch() -> Box<Self::Patch>;
+    type Patch: NewBoxed;
+    fn new_patch() -> Box<Self::Patch> {
+        Self::Patch::new_boxed()
+    }
     /// Interpolates T, X, Y at `(ix, iy)` of the previous level and returns
     /// the structure-tensor sums (ΣX², ΣXY, ΣY²) in OpenCV's order.
     fn load_patch(
@@ -161,6 +163,12 @@ pub(super) trait Kernels {
     fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], patch: &mut Self::Patch) -> f32;
 }
 
+/// A kernel set's window buffers, allocated zeroed on the heap: the x86 and
+/// wasm kernels share `wide::Patch`, so its allocation is written once.
+pub(super) trait NewBoxed {
+    fn new_boxed() -> Box<Self>;
+}
+
 /// Window buffers reused across points (every element is written before
 /// it is read).
 pub(super) struct Scratch {
@@ -170,14 +178,16 @@ pub(super) struct Scratch {
     warped: Win,
 }
 
+impl NewBoxed for Scratch {
+    fn new_boxed() -> Box<Scratch> {
+        Box::new(Scratch { tmpl: [[0; WS]; WIN], gx: [[0; WS]; WIN], gy: [[0; WS]; WIN], warped: [[0; WS]; WIN] })
+    }
+}
+
 pub(super) struct Scalar;
 
 impl Kernels for Scalar {
     type Patch = Scratch;
-
-    fn new_patch() -> Box<Scratch> {
-        Box::new(Scratch { tmpl: [[0; WS]; WIN], gx: [[0; WS]; WIN], gy: [[0; WS]; WIN], warped: [[0; WS]; WIN] })
-    }
 
     #[inline(always)]
     fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], s: &mut Scratch) -> (f32, f32, f32) {

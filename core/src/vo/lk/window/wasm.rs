@@ -229,10 +229,6 @@ fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) -> f32 
 impl Kernels for Simd128 {
     type Patch = Patch;
 
-    fn new_patch() -> Box<Patch> {
-        Patch::new_boxed()
-    }
-
     #[inline(always)]
     fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
         load_patch(prev, deriv, ix, iy, w, p)

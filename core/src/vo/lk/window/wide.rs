@@ -46,8 +46,8 @@ pub struct Patch {
     pub d: Win16,
 }
 
-impl Patch {
-    pub fn new_boxed() -> Box<Patch> {
+impl super::NewBoxed for Patch {
+    fn new_boxed() -> Box<Patch> {
         let zero = [Row([0; 32]); WIN];
         Box::new(Patch { t: zero, x: zero, y: zero, ax: zero, ay: zero, d: zero })
     }

@@ -507,10 +507,6 @@ fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> 
 impl Kernels for Avx512 {
     type Patch = Patch;
 
-    fn new_patch() -> Box<Patch> {
-        Patch::new_boxed()
-    }
-
     // Only the mismatch differs from the AVX2 kernels (an AVX-512 BW CPU has AVX2).
     #[inline(always)]
     fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
@@ -532,10 +528,6 @@ impl Kernels for Avx512 {
 
 impl Kernels for Avx2 {
     type Patch = Patch;
-
-    fn new_patch() -> Box<Patch> {
-        Patch::new_boxed()
-    }
 
     #[inline(always)]
     fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
