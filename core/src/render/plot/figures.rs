@@ -17,7 +17,7 @@ pub const TEXT: f64 = 14.0;
 const MARGIN: (f64, f64, f64, f64) = (64.0, 16.0, 36.0, 48.0); // left, right, top, bottom
 
 fn text(at: (f64, f64), s: impl Into<String>, anchor: Anchor, color: Color) -> Shape {
-    Shape::Text { at, text: s.into(), size: TEXT, anchor, color }
+    Shape::text(at, s, TEXT, anchor, color)
 }
 
 /// The plot box inside a `w`×`h` figure: (left, top, width, height).

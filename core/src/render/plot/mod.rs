@@ -92,6 +92,11 @@ impl Scene {
 }
 
 impl Shape {
+    /// A [`Shape::Text`].
+    pub fn text(at: (f64, f64), text: impl Into<String>, size: f64, anchor: Anchor, color: Color) -> Shape {
+        Shape::Text { at, text: text.into(), size, anchor, color }
+    }
+
     fn shifted(&self, dx: f64, dy: f64) -> Shape {
         let p = |(x, y): (f64, f64)| (x + dx, y + dy);
         match self.clone() {

@@ -77,13 +77,7 @@ mod tests {
         let mut s = Scene::new(60, 40);
         s.shapes.push(Shape::Line { from: (5.0, 10.0), to: (55.0, 10.0), color: [255, 0, 0], width: 1.0 });
         s.shapes.push(Shape::Circle { center: (30.0, 30.0), r: 4.0, fill: [0, 0, 255], stroke: None });
-        s.shapes.push(Shape::Text {
-            at: (59.0, 20.0),
-            text: "1".into(),
-            size: 7.0,
-            anchor: Anchor::End,
-            color: [0, 0, 0],
-        });
+        s.shapes.push(Shape::text((59.0, 20.0), "1", 7.0, Anchor::End, [0, 0, 0]));
         let img = rasterize(&s);
         assert_eq!(img.dimensions(), (60, 40));
         assert_eq!(img.get_pixel(0, 0).0, [255, 255, 255]);

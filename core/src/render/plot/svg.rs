@@ -122,13 +122,7 @@ mod tests {
     #[test]
     fn svg_text_is_escaped_and_compact() {
         let mut s = Scene::new(100, 50);
-        s.shapes.push(Shape::Text {
-            at: (10.0, 20.5),
-            text: "a<b & \"c\"".into(),
-            size: 14.0,
-            anchor: Anchor::End,
-            color: [0, 0, 0],
-        });
+        s.shapes.push(Shape::text((10.0, 20.5), "a<b & \"c\"", 14.0, Anchor::End, [0, 0, 0]));
         s.shapes.push(Shape::Polyline { points: vec![(0.0, -0.001), (1.25, 2.0)], color: [255, 0, 16], width: 2.0 });
         let svg = to_svg(&s, Some("plot"));
         assert!(svg.starts_with("<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"100\" height=\"50\" viewBox=\"0 0 100 50\" data-testid=\"plot\""), "{svg}");

@@ -12,15 +12,20 @@
 //! kernel inside a `#[target_feature]` function of its ISA, so the
 //! intrinsics inline into one loop per ISA.
 
-/// The [`Lanes`] methods that are one intrinsic each, from a table that
-/// names the intrinsic per method: `ff` for (F, F) → F, `fff` for the FMA,
-/// `cmp` for (F, F) → M, `mm` for (M, M) → M, `ii` for (I, I) → I, then
-/// the loads, stores, splats and the i32 → f32 conversion.
+/// The width, the vector types and the [`Lanes`] methods that are one
+/// intrinsic each, from a table that names the intrinsic per method: `ff`
+/// for (F, F) → F, `fff` for the FMA, `cmp` for (F, F) → M, `mm` for
+/// (M, M) → M, `ii` for (I, I) → I, then the loads, stores, splats and the
+/// i32 → f32 conversion.
 macro_rules! one_intrinsic_each {
-    (ff: $($ff:ident = $ffi:expr),*; fff: $($fff:ident = $fffi:expr),*; cmp: $($cmp:ident = $cmpi:expr),*;
-     mm: $($mm:ident = $mmi:expr),*; ii: $($ii:ident = $iii:expr),*;
+    (N = $n:expr, F = $f:ty, I = $i:ty, M = $m:ty; ff: $($ff:ident = $ffi:expr),*; fff: $($fff:ident = $fffi:expr),*;
+     cmp: $($cmp:ident = $cmpi:expr),*; mm: $($mm:ident = $mmi:expr),*; ii: $($ii:ident = $iii:expr),*;
      load = $load:expr, store = $store:expr, store_i = $store_i:expr, splat = $splat:expr, splat_i = $splat_i:expr,
      to_f = $to_f:expr;) => {
+        const N: usize = $n;
+        type F = $f;
+        type I = $i;
+        type M = $m;
         $(#[inline(always)] #[allow(unused_unsafe)] fn $ff(self, a: Self::F, b: Self::F) -> Self::F {
             // SAFETY: a token exists only where the CPU has its instructions.
             unsafe { $ffi(a, b) }

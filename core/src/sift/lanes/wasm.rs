@@ -52,22 +52,13 @@ const COMPRESS: [v128; 16] = {
 };
 
 impl<F: Fma4> Lanes for Simd128<F> {
-    const N: usize = 4;
-    type F = v128;
-    type I = v128;
-    type M = v128;
-
     // `pmax`/`pmin` are one instruction each and equal `max`/`min` here: no
     // NaN arises from 8-bit images, and the ±0 ties where they differ cannot
     // decide a test whose value lies beyond the threshold (docs/fidelity.md §SIFT-6).
     one_intrinsic_each! {
-        ff: add = f32x4_add, sub = f32x4_sub, mul = f32x4_mul, max = f32x4_pmax, min = f32x4_pmin;
-        fff: ;
-        cmp: gt = f32x4_gt, lt = f32x4_lt, ge = f32x4_ge, le = f32x4_le;
-        mm: and = v128_and, or = v128_or;
-        ii: add_i = i32x4_add, mul_i = i32x4_mul;
-        load = v128_load, store = v128_store, store_i = v128_store, splat = f32x4_splat, splat_i = i32x4_splat,
-            to_f = f32x4_convert_i32x4;
+        N = 4, F = v128, I = v128, M = v128; ff: add = f32x4_add, sub = f32x4_sub, mul = f32x4_mul, max = f32x4_pmax, min = f32x4_pmin; fff: ;
+        cmp: gt = f32x4_gt, lt = f32x4_lt, ge = f32x4_ge, le = f32x4_le; mm: and = v128_and, or = v128_or; ii: add_i = i32x4_add, mul_i = i32x4_mul;
+        load = v128_load, store = v128_store, store_i = v128_store, splat = f32x4_splat, splat_i = i32x4_splat, to_f = f32x4_convert_i32x4;
     }
 
     #[inline(always)]

@@ -41,20 +41,11 @@ pub(super) fn run<K: Kernel>(k: &mut K) -> usize {
 // its intrinsics need; the raw-pointer ones add the caller's promise.
 
 impl Lanes for Avx512 {
-    const N: usize = 16;
-    type F = __m512;
-    type I = __m512i;
-    type M = __mmask16;
-
     one_intrinsic_each! {
-        ff: add = _mm512_add_ps, sub = _mm512_sub_ps, mul = _mm512_mul_ps, max = _mm512_max_ps, min = _mm512_min_ps;
-        fff: fma = _mm512_fmadd_ps;
-        cmp: gt = _mm512_cmp_ps_mask::<_CMP_GT_OQ>, lt = _mm512_cmp_ps_mask::<_CMP_LT_OQ>,
-            ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>, le = _mm512_cmp_ps_mask::<_CMP_LE_OQ>;
-        mm: and = std::ops::BitAnd::bitand, or = std::ops::BitOr::bitor;
-        ii: add_i = _mm512_add_epi32, mul_i = _mm512_mullo_epi32;
-        load = _mm512_loadu_ps, store = _mm512_storeu_ps, store_i = _mm512_storeu_si512, splat = _mm512_set1_ps,
-            splat_i = _mm512_set1_epi32, to_f = _mm512_cvtepi32_ps;
+        N = 16, F = __m512, I = __m512i, M = __mmask16; ff: add = _mm512_add_ps, sub = _mm512_sub_ps, mul = _mm512_mul_ps, max = _mm512_max_ps, min = _mm512_min_ps; fff: fma = _mm512_fmadd_ps;
+        cmp: gt = _mm512_cmp_ps_mask::<_CMP_GT_OQ>, lt = _mm512_cmp_ps_mask::<_CMP_LT_OQ>, ge = _mm512_cmp_ps_mask::<_CMP_GE_OQ>, le = _mm512_cmp_ps_mask::<_CMP_LE_OQ>;
+        mm: and = std::ops::BitAnd::bitand, or = std::ops::BitOr::bitor; ii: add_i = _mm512_add_epi32, mul_i = _mm512_mullo_epi32;
+        load = _mm512_loadu_ps, store = _mm512_storeu_ps, store_i = _mm512_storeu_si512, splat = _mm512_set1_ps, splat_i = _mm512_set1_epi32, to_f = _mm512_cvtepi32_ps;
     }
 
     #[inline(always)]
@@ -102,20 +93,11 @@ static COMPRESS: [[u32; 8]; 256] = {
 };
 
 impl Lanes for Avx2 {
-    const N: usize = 8;
-    type F = __m256;
-    type I = __m256i;
-    type M = __m256;
-
     one_intrinsic_each! {
-        ff: add = _mm256_add_ps, sub = _mm256_sub_ps, mul = _mm256_mul_ps, max = _mm256_max_ps, min = _mm256_min_ps;
-        fff: fma = _mm256_fmadd_ps;
-        cmp: gt = _mm256_cmp_ps::<_CMP_GT_OQ>, lt = _mm256_cmp_ps::<_CMP_LT_OQ>, ge = _mm256_cmp_ps::<_CMP_GE_OQ>,
-            le = _mm256_cmp_ps::<_CMP_LE_OQ>;
-        mm: and = _mm256_and_ps, or = _mm256_or_ps;
-        ii: add_i = _mm256_add_epi32, mul_i = _mm256_mullo_epi32;
-        load = _mm256_loadu_ps, store = _mm256_storeu_ps, store_i = _mm256_storeu_si256, splat = _mm256_set1_ps,
-            splat_i = _mm256_set1_epi32, to_f = _mm256_cvtepi32_ps;
+        N = 8, F = __m256, I = __m256i, M = __m256; ff: add = _mm256_add_ps, sub = _mm256_sub_ps, mul = _mm256_mul_ps, max = _mm256_max_ps, min = _mm256_min_ps; fff: fma = _mm256_fmadd_ps;
+        cmp: gt = _mm256_cmp_ps::<_CMP_GT_OQ>, lt = _mm256_cmp_ps::<_CMP_LT_OQ>, ge = _mm256_cmp_ps::<_CMP_GE_OQ>, le = _mm256_cmp_ps::<_CMP_LE_OQ>;
+        mm: and = _mm256_and_ps, or = _mm256_or_ps; ii: add_i = _mm256_add_epi32, mul_i = _mm256_mullo_epi32;
+        load = _mm256_loadu_ps, store = _mm256_storeu_ps, store_i = _mm256_storeu_si256, splat = _mm256_set1_ps, splat_i = _mm256_set1_epi32, to_f = _mm256_cvtepi32_ps;
     }
 
     #[inline(always)]

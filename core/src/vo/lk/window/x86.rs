@@ -351,28 +351,43 @@ pub(super) fn mismatch_lanes_replay(p: &Patch) -> [f32; 4] {
     t
 }
 
-#[target_feature(enable = "avx2")]
-fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+/// The first byte of the next image's window at (jx, jy) and the level's
+/// stride, with the one bounds check the kernels' raw reads rely on: rows
+/// 0 ..= 21 of the window, whose last 32 bytes end inside the padded level.
+fn window_start(next: &Level, jx: i32, jy: i32) -> (*const u8, usize) {
     let base = next.offset(jx, jy);
     assert!(base + WIN * next.stride + 32 <= next.padded.len());
-    let src = next.padded[base..].as_ptr();
-    let stride = next.stride;
+    (next.padded[base..].as_ptr(), next.stride)
+}
+
+/// The next image's window at (jx, jy), row by row: each row y of 0..21
+/// bilinearly warped from rows y and y + 1 (`blend`, scale 2^-9), handed to
+/// `row` with its index.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn warped_rows(next: &Level, jx: i32, jy: i32, w: &[i32; 4], mut row: impl FnMut(usize, (__m256i, __m128i))) {
+    let (src, stride) = window_start(next, jx, jy);
     let (wt, wb) = weight_pairs(w);
-    let (mut sx, mut sy, mut bx, mut by) = (Sum::new(), Sum::new(), Sum::new(), Sum::new());
-    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
-    // inside the padded level (asserted above).
+    // SAFETY: row 0 of the window (`window_start` checked rows 0 ..= 21).
     let mut top = unsafe { pairs_u8(src) };
     for y in 0..WIN {
-        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
+        // SAFETY: row y + 1 ≤ 21 of the same window.
         let bot = unsafe { pairs_u8(src.add((y + 1) * stride)) };
-        let (j, tj) = blend::<9>(&top, &bot, wt, wb);
+        row(y, blend::<9>(&top, &bot, wt, wb));
         top = bot;
+    }
+}
+
+#[target_feature(enable = "avx2")]
+fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
+    let (mut sx, mut sy, mut bx, mut by) = (Sum::new(), Sum::new(), Sum::new(), Sum::new());
+    warped_rows(next, jx, jy, w, |y, (j, tj)| {
         let (t, tt) = load(&p.t[y]);
         let d = (_mm256_sub_epi16(j, t), _mm_sub_epi16(tj, tt));
         store(&mut p.d[y], d.0, d.1);
         sx.add(d, load(&p.x[y]));
         sy.add(d, load(&p.y[y]));
-    }
+    });
     // The bounds in a second pass over the stored differences: in the first
     // their two accumulators did not fit in the 16 registers, and one went
     // through the stack every row (a store-to-load chain that was a third
@@ -389,25 +404,14 @@ fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32
 
 #[target_feature(enable = "avx2")]
 fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) -> f32 {
-    let base = next.offset(jx, jy);
-    assert!(base + WIN * next.stride + 32 <= next.padded.len());
-    let src = next.padded[base..].as_ptr();
-    let (wt, wb) = weight_pairs(w);
     let ones = _mm256_set1_epi16(1);
     let tail_ones = _mm_setr_epi16(1, 1, 1, 1, 1, 0, 0, 0);
     let mut total = Sum::new();
-    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
-    // inside the padded level (asserted above).
-    let mut top = unsafe { pairs_u8(src) };
-    for y in 0..WIN {
-        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
-        let bot = unsafe { pairs_u8(src.add((y + 1) * next.stride)) };
-        let (j, tj) = blend::<9>(&top, &bot, wt, wb);
-        top = bot;
+    warped_rows(next, jx, jy, w, |y, (j, tj)| {
         let (t, tt) = load(&p.t[y]);
         let ad = (_mm256_abs_epi16(_mm256_sub_epi16(j, t)), _mm_abs_epi16(_mm_sub_epi16(tj, tt)));
         total.add(ad, (ones, tail_ones));
-    }
+    });
     wide::abs_diff_total(&total.acc())
 }
 
@@ -435,18 +439,16 @@ unsafe fn pairs_u8_512(p: *const u8) -> (__m512i, __m512i) {
     };
     let hi = _mm256_castsi128_si256(hi);
     let src = _mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi);
+    // Two shuffles of the four 128-bit chunks (chunk 3 first, as
+    // `_mm512_set_epi8` takes them), 32 bytes a line.
     #[rustfmt::skip]
     let ma = _mm512_set_epi8(
-        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z,
-        Z, 4, Z, 3, Z, 3, Z, 2, Z, 2, Z, 1, Z, 1, Z, 0,
-        Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0,
-        Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0);
+        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, 4, Z, 3, Z, 3, Z, 2, Z, 2, Z, 1, Z, 1, Z, 0,
+        Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0, Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0);
     #[rustfmt::skip]
     let mb = _mm512_set_epi8(
-        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z,
-        Z, 8, Z, 7, Z, 7, Z, 6, Z, 6, Z, 5, Z, 5, Z, 4,
-        Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2,
-        Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2);
+        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, 8, Z, 7, Z, 7, Z, 6, Z, 6, Z, 5, Z, 5, Z, 4,
+        Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2, Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2);
     (_mm512_shuffle_epi8(src, ma), _mm512_shuffle_epi8(src, mb))
 }
 
@@ -472,10 +474,7 @@ fn acc_512(v: __m512i) -> Acc {
 
 #[target_feature(enable = "avx512bw,avx512f,avx2")]
 fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
-    let base = next.offset(jx, jy);
-    assert!(base + WIN * next.stride + 32 <= next.padded.len());
-    let src = next.padded[base..].as_ptr();
-    let stride = next.stride;
+    let (src, stride) = window_start(next, jx, jy);
     let wt = _mm512_set1_epi32((w[1] << 16) | (w[0] & 0xffff));
     let wb = _mm512_set1_epi32((w[3] << 16) | (w[2] & 0xffff));
     // SAFETY: a Row is 32 i16, exactly the 64 bytes loaded (unaligned).
@@ -483,7 +482,7 @@ fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> 
     let zero = _mm512_setzero_si512();
     let (mut sx, mut sy, mut bx, mut by) = (zero, zero, zero, zero);
     // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
-    // inside the padded level (asserted above).
+    // inside the padded level (`window_start` checked them).
     let mut top = unsafe { pairs_u8_512(src) };
     for y in 0..WIN {
         // SAFETY: row y + 1 ≤ 21 of the same window (see above).
