@@ -104,10 +104,14 @@ impl Kernel for Accumulate<'_> {
         let mut k = start;
         while k + nl <= self.len {
             // SAFETY: samples k..k + nl <= len, inside every row (asserted).
-            let load = |v: &[f32]| unsafe { l.load(v.as_ptr().add(k)) };
-            let (mut rbin, mut cbin) = (load(s.rbin), load(s.cbin));
-            let mut obin = l.mul(l.sub(load(s.ori), ori_v), bpd);
-            let mag = l.mul(load(s.mag), load(s.wt));
+            // (Loads written out: a closure would be compiled without the
+            // ISA's target features, its intrinsics left as calls.)
+            let (mut rbin, mut cbin, ori, mag, wt) = unsafe {
+                let at = |v: &[f32]| v.as_ptr().add(k);
+                (l.load(at(s.rbin)), l.load(at(s.cbin)), l.load(at(s.ori)), l.load(at(s.mag)), l.load(at(s.wt)))
+            };
+            let mut obin = l.mul(l.sub(ori, ori_v), bpd);
+            let mag = l.mul(mag, wt);
             let (r0, c0, o0) = (l.floor(rbin), l.floor(cbin), l.floor(obin));
             rbin = l.sub(rbin, l.to_f(r0));
             cbin = l.sub(cbin, l.to_f(c0));

@@ -48,27 +48,17 @@ impl Kernel for RowExtrema<'_> {
             max.resize(w, 0.0);
             min.resize(w, 0.0);
             let (cmax, cmin) = (max.as_mut_ptr(), min.as_mut_ptr());
-            // SAFETY: called with x0 <= x and x + n <= w: columns every row
-            // holds (asserted above) and inside the scratch rows (w).
-            let column = |x: usize| unsafe {
-                let first = l.load(p[0].add(x));
-                let (mut mx, mut mn) = (first, first);
-                for &row in &p[1..] {
-                    let s = l.load(row.add(x));
-                    mx = l.max(mx, s);
-                    mn = l.min(mn, s);
-                }
-                l.store(cmax.add(x), mx);
-                l.store(cmin.add(x), mn);
-            };
             let mut x = x0;
             while x + n <= w {
-                column(x);
+                // SAFETY: x0 <= x and x + n <= w: columns every row holds
+                // (asserted above), inside the scratch rows (w).
+                unsafe { column(l, &p, cmax, cmin, x) };
                 x += n;
             }
             // The last block overlaps the one before: max and min again.
             if x < w {
-                column(w - n);
+                // SAFETY: as above, with x = w − n >= x0.
+                unsafe { column(l, &p, cmax, cmin, w - n) };
             }
             self.columns_done = true;
         }
@@ -107,5 +97,27 @@ impl Kernel for RowExtrema<'_> {
         // examined ≤ the room reserved).
         unsafe { out.set_len(k) };
         x - cols.start
+    }
+}
+
+/// The maximum and minimum over the nine rows of columns `x..x + N`.
+/// (A function, not a closure: a closure is compiled without the ISA's
+/// target features, and its intrinsics would stay calls.)
+///
+/// # Safety
+/// Columns `x..x + N` of the nine rows and of `cmax`, `cmin` exist.
+#[inline(always)]
+unsafe fn column<L: Lanes>(l: L, p: &[*const f32; 9], cmax: *mut f32, cmin: *mut f32, x: usize) {
+    // SAFETY: the caller's promise.
+    unsafe {
+        let first = l.load(p[0].add(x));
+        let (mut mx, mut mn) = (first, first);
+        for &row in &p[1..] {
+            let s = l.load(row.add(x));
+            mx = l.max(mx, s);
+            mn = l.min(mn, s);
+        }
+        l.store(cmax.add(x), mx);
+        l.store(cmin.add(x), mn);
     }
 }
