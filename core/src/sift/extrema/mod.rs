@@ -199,7 +199,7 @@ struct ColumnExtremes {
 }
 
 /// The 26-neighbour test of one scan row: vectors where the target has
-/// them and the rows have a pixel on each side of `cols`, then the scalar
+/// them (and the rows have a pixel on each side of `cols`), then the scalar
 /// test on the columns left.
 fn row_extrema(
     rows: &[&[f32]; 9],
@@ -208,11 +208,8 @@ fn row_extrema(
     out: &mut Vec<usize>,
     scratch: &mut ColumnExtremes,
 ) {
-    let mut done = cols.start;
-    if rows.iter().all(|r| r.len() > cols.end) && cols.start >= 1 {
-        let mut k = vector::RowExtrema { rows, thr, cols: cols.clone(), out, scratch, columns_done: false };
-        done += super::lanes::run(&mut k);
-    }
+    let mut k = vector::RowExtrema { rows, thr, cols: cols.clone(), out, scratch, columns_done: false };
+    let done = cols.start + super::lanes::run(&mut k);
     row_extrema_generic(rows, thr, done..cols.end, out)
 }
 

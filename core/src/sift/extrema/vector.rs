@@ -20,7 +20,8 @@ use std::ops::Range;
 
 /// One scan row's test; positions are columns from `cols.start`.
 pub(super) struct RowExtrema<'a> {
-    /// Rows that extend one pixel past `cols` on each side.
+    /// The nine rows; vectors run only where they extend one pixel past
+    /// `cols` on each side.
     pub rows: &'a [&'a [f32]; 9],
     pub thr: f32,
     pub cols: Range<usize>,
@@ -36,10 +37,14 @@ impl Kernel for RowExtrema<'_> {
     fn apply<L: Lanes>(&mut self, l: L, start: usize) -> usize {
         let n = L::N;
         let cols = self.cols.clone();
-        // Columns cols.start − 1 ..= cols.end: every row holds them.
+        // The raw reads below need every row to hold columns
+        // cols.start − 1 ..= cols.end; rows without that margin (or too
+        // short for one vector) are left to the scalar test.
+        if cols.start == 0 {
+            return start;
+        }
         let (x0, w) = (cols.start - 1, cols.end + 1);
-        assert!(cols.start >= 1 && self.rows.iter().all(|r| r.len() >= w), "rows one pixel wider than cols");
-        if w - x0 < n {
+        if self.rows.iter().any(|r| r.len() < w) || w < x0 + n {
             return start;
         }
         let p: [*const f32; 9] = std::array::from_fn(|i| self.rows[i].as_ptr());
@@ -51,7 +56,7 @@ impl Kernel for RowExtrema<'_> {
             let mut x = x0;
             while x + n <= w {
                 // SAFETY: x0 <= x and x + n <= w: columns every row holds
-                // (asserted above), inside the scratch rows (w).
+                // (checked above), inside the scratch rows (w).
                 unsafe { column(l, &p, cmax, cmin, x) };
                 x += n;
             }

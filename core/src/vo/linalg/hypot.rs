@@ -19,7 +19,7 @@ pub(super) const EPS: f64 = f64::from_bits(0x3c90_0000_0000_0000); // 2^-54
 /// correction step from the exact residual, computed without FMA by splitting
 /// the square differently when the two inputs are close (`h ≤ 2·ay`).
 #[inline(always)]
-pub(super) fn kernel(ax: f64, ay: f64) -> f64 {
+fn kernel(ax: f64, ay: f64) -> f64 {
     let h = (ax * ax + ay * ay).sqrt();
     let (t1, t2);
     if h <= 2.0 * ay {

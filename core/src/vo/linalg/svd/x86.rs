@@ -41,9 +41,9 @@ fn from_lanes(v: &[f64; 4]) -> __m256d {
     unsafe { _mm256_loadu_pd(v.as_ptr()) }
 }
 
-/// [`crate::vo::linalg::hypot`] (glibc's, the kernel without FMA), lane by lane, for the common case: both inputs finite,
-/// the larger not above 2^511 and the smaller not below 2^-459. Lanes
-/// outside it (zeros, NaN, extreme magnitudes) are handed to the scalar
+/// [`crate::vo::linalg::hypot`] (glibc's, the kernel without FMA), lane by
+/// lane, for the common case: both inputs finite, the larger not above
+/// 2^511 and the smaller not below 2^-459. Lanes outside it (zeros, NaN, extreme magnitudes) are handed to the scalar
 /// function one by one, those of `live` only (the others' results are
 /// thrown away).
 ///
