@@ -1,27 +1,32 @@
-// End-to-end tests of the siftlab app in real headless Chromium (Debian's), driven by
-// playwright-core, against the static site in dist/ served on localhost (tests/e2e/run.sh
-// starts the server and passes BASE_URL). The reference is the native CLI
-// (target/release/siftlab) on the same frames.
+// End-to-end tests of the siftlab app in a real browser engine — Chromium, Firefox ESR or
+// WebKitGTK (Safari's engine), chosen by E2E_ENGINE — driven over W3C WebDriver
+// (tests/e2e/harness.mjs) against dist/ served on localhost. The same cases run in every
+// engine; the reference is the native CLI (target/release/siftlab) on the same frames.
+// Slow engines get short inputs, never fewer cases: WebKit runs the SIMD128 worker, so
+// its odometry cases run fewer frames (E2E_VO_FRAME_ID).
 import { test, before, after, beforeEach, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launch, serve, ROOT } from './harness.mjs';
 
-const HERE = path.dirname(fileURLToPath(import.meta.url));
-const ROOT = path.resolve(HERE, '../..');
-const BASE = process.env.BASE_URL || 'http://127.0.0.1:8080/';
-const ORIGIN = new URL(BASE).origin;
+const ENGINE = process.env.E2E_ENGINE || 'chromium';
+// The odometry cases' FRAME_ID: the demo's whole straight run (0–99) where SIFT takes
+// well under a second a frame, 9 (ten frames) in WebKit (~3 s a frame, no relaxed SIMD).
+const VO_LAST = Number(process.env.E2E_VO_FRAME_ID || (ENGINE === 'webkit' ? 9 : 99));
+// Whether the engine validates relaxed SIMD (measured: Chromium 156 and Firefox 153 do,
+// WebKitGTK 2.50 does not), i.e. which worker build www/worker.js must pick.
+const RELAXED = { chromium: true, firefox: true, webkit: false }[ENGINE];
 // tests/e2e/run.sh passes the CLI it built (CARGO_TARGET_DIR honoured).
 const CLI = process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab');
 const DATASET = 'www/demo/MyKITTI';
 const FRAME = (id) => path.join(ROOT, DATASET, 'gray/00/image_0', String(id).padStart(6, '0') + '.png');
-const SHOTS = path.join(HERE, 'screenshots');
+const SHOTS = path.join(path.dirname(new URL(import.meta.url).pathname), 'screenshots', ENGINE);
 fs.mkdirSync(SHOTS, { recursive: true });
-const metrics = {};
+const shot = (name) => path.join(SHOTS, name);
+const metrics = { engine: ENGINE };
 
 // OpenCV dispatches SIFT to AVX-512 kernels (16 lanes) when the CPU has F/CD/BW/DQ/VL, else
 // AVX2 (8); the CLI reproduces the host's build by default, so the app is told the same.
@@ -41,6 +46,12 @@ function cliRet(args) {
   assert.ok(line, out);
   return line.slice('ret value: '.length);
 }
+// The app's default width (8 lanes, AVX2), whatever the host: what the lab manual's
+// examples and a plain link are computed with.
+function cliRet8(args) {
+  const out = execFileSync(CLI, ['--opencv-lanes', '8', '-d', DATASET, 'get_info', ...args], { cwd: ROOT, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+  return out.split('\n').find((l) => l.startsWith('ret value: ')).slice('ret value: '.length);
+}
 const siftCache = new Map();
 function cliSift(id, lanes = LANES) {
   const key = `${id}/${lanes}`;
@@ -52,43 +63,30 @@ function cliSift(id, lanes = LANES) {
 }
 
 let browser;
-let context;
+let server;
+let BASE;
 let page;
-let consoleErrors;
-let offOrigin;
 
 before(async () => {
   assert.ok(fs.existsSync(CLI), `${CLI} missing: cargo build --release --bin siftlab`);
-  browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-           '--disable-component-update', '--disable-sync', '--disable-quic'],
-  });
+  server = await serve(path.join(ROOT, 'dist'));
+  BASE = server.base;
+  browser = await launch(ENGINE);
+  metrics.browserVersion = browser.version;
 });
 after(async () => {
   await browser?.close();
+  await server?.close();
   fs.writeFileSync(path.join(SHOTS, 'metrics.json'), JSON.stringify(metrics, null, 2));
 });
-
 beforeEach(async () => {
-  context = await browser.newContext({ viewport: { width: 1400, height: 900 } });
-  consoleErrors = [];
-  offOrigin = [];
-  // Every request the page or its workers make must stay on our origin.
-  context.on('request', (r) => {
-    const u = r.url();
-    if (!u.startsWith('data:') && !u.startsWith('blob:') && new URL(u).origin !== ORIGIN) offOrigin.push(u);
-  });
-  page = await context.newPage();
-  const onConsole = (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); };
-  page.on('console', onConsole);
-  page.on('pageerror', (e) => consoleErrors.push(String(e)));
-  page.on('worker', (w) => { try { w.on('console', onConsole); } catch { /* older playwright */ } });
+  page = await browser.newPage({ width: 1400, height: 900 });
 });
 afterEach(async () => {
-  await context?.close();
-  assert.deepEqual(offOrigin, [], 'requests left the origin');
-  assert.deepEqual(consoleErrors, [], 'console errors');
+  // Every request stays on our origin (CSP violations are recorded as errors too), and
+  // nothing was logged as an error by the page or thrown by its workers.
+  assert.deepEqual(await page.offOrigin(), [], 'requests left the origin');
+  assert.deepEqual(await page.flushErrors(), [], 'console errors');
 });
 
 const tid = (id) => `[data-testid="${id}"]`;
@@ -104,6 +102,13 @@ async function settings(algo, t, feature, p = page) {
 async function tuple(p = page) {
   return (await p.textContent(tid('result-tuple'))).trim();
 }
+/** Waits until the tuple on screen is `want` (the update is synchronous, the paint not). */
+async function tupleIs(want, what) {
+  await page.waitForFunction(([sel, w]) => document.querySelector(sel)?.textContent.trim() === w, [tid('result-tuple'), want], { timeout: 5000 })
+    .catch(() => {});
+  assert.equal(await tuple(), want, what);
+}
+const ENGINE_LABEL = RELAXED ? 'relaxed SIMD' : 'SIMD128';
 
 test('demo: counts and nndr 0.8 tuples equal the native CLI; URL restores the view', async () => {
   const t0 = Date.now();
@@ -120,23 +125,18 @@ test('demo: counts and nndr 0.8 tuples equal the native CLI; URL restores the vi
   assert.equal(await page.textContent(tid('keypoint-count-prev')), String(sift[0].keypoints.length));
   assert.equal(await page.textContent(tid('keypoint-count-cur')), String(sift[1].keypoints.length));
   // SIFT time per frame as the page measured it in its worker.
-  const infos = await page.$$eval('.slot-info', (els) => els.map((e) => e.textContent));
-  metrics.chromiumSiftMs = infos.map((s) => Number((s.match(/SIFT (\d+) ms/) || [])[1]));
-  // Chromium has relaxed SIMD, so worker.js loaded the relaxed build, and its
-  // relaxed_madd is fused: SIFT ran on the engine's FMA (the counts above and the
-  // tuples below are that build's).
+  const infos = await page.evalAll('.slot-info', (e) => e.textContent);
+  metrics.siftMs = infos.map((s) => Number((s.match(/SIFT (\d+) ms/) || [])[1]));
+  // worker.js picks the relaxed build where the engine validates relaxed SIMD, else SIMD128.
   for (const which of ['prev', 'cur']) {
-    assert.equal((await page.textContent(tid(`keypoint-count-${which}-engine`))).trim(), 'relaxed SIMD');
+    assert.equal((await page.textContent(tid(`keypoint-count-${which}-engine`))).trim(), ENGINE_LABEL);
   }
-  metrics.nativeSift = [0, 1].map((id) => execFileSync(CLI, ['sift', FRAME(id)], { cwd: ROOT, encoding: 'utf8' }).trim());
   const n = sift[0].keypoints.length;
   let nonEmpty = 0;
   for (const f of [0, 7, 42, 123, 500, 777, 1024, n - 1]) {
     await settings('nndr', '0.8', f);
     const want = cliRet(['-a', 'nndr', '-t', '0.8', '1', String(f)]);
-    await page.waitForFunction(([sel, w]) => document.querySelector(sel)?.textContent.trim() === w, [tid('result-tuple'), want], { timeout: 5000 })
-      .catch(() => {});
-    assert.equal(await tuple(), want, `feature ${f}`);
+    await tupleIs(want, `feature ${f}`);
     // The core's time for the update, as the page shows it ("computed in X ms").
     const ms = Number(((await page.textContent('.result')).match(/computed in ([\d.]+) ms/) || [])[1]);
     metrics.analysisMsMax = Math.max(metrics.analysisMsMax || 0, ms);
@@ -146,22 +146,19 @@ test('demo: counts and nndr 0.8 tuples equal the native CLI; URL restores the vi
   assert.ok(nonEmpty >= 2, 'some features should match under nndr 0.8');
   // dt and nn too, on one feature.
   await settings('dt', '250', 42);
-  assert.equal(await tuple(), cliRet(['-a', 'dt', '-t', '250', '1', '42']));
+  await tupleIs(cliRet(['-a', 'dt', '-t', '250', '1', '42']));
   await settings('nn', '', 42);
-  assert.equal(await tuple(), cliRet(['-a', 'nn', '1', '42']));
+  await tupleIs(cliRet(['-a', 'nn', '1', '42']));
   await settings('nndr', '0.8', 123);
-  await page.screenshot({ path: path.join(SHOTS, 'demo-nndr.png'), fullPage: true });
+  await page.screenshot(shot('demo-nndr.png'), { fullPage: true });
   // The URL carries the view; a fresh page opens on it.
-  const url = page.url();
+  const url = await page.url();
   assert.match(url, /algo=nndr/);
   assert.match(url, /t=0\.8/);
   assert.match(url, /feature=123/);
-  const p2 = await context.newPage();
-  p2.on('console', (m) => { if (m.type() === 'error') consoleErrors.push(m.text()); });
-  await p2.goto(url);
-  await idle(p2);
-  assert.equal(await tuple(p2), cliRet(['-a', 'nndr', '-t', '0.8', '1', '123']));
-  await p2.close();
+  await page.goto(url);
+  await idle();
+  assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', '123']));
 });
 
 test('?wasm=portable: the SIMD128 worker build gives the same keypoints and tuples', async () => {
@@ -169,15 +166,15 @@ test('?wasm=portable: the SIMD128 worker build gives the same keypoints and tupl
   await page.goto(`${BASE}?lanes=${LANES}&wasm=portable`);
   await idle();
   metrics.demoReadyMsPortable = Date.now() - t0;
-  const infos = await page.$$eval('.slot-info', (els) => els.map((e) => e.textContent));
-  metrics.chromiumSiftMsPortable = infos.map((s) => Number((s.match(/SIFT (\d+) ms/) || [])[1]));
+  const infos = await page.evalAll('.slot-info', (e) => e.textContent);
+  metrics.siftMsPortable = infos.map((s) => Number((s.match(/SIFT (\d+) ms/) || [])[1]));
   for (const [i, which] of ['prev', 'cur'].entries()) {
     assert.equal((await page.textContent(tid(`keypoint-count-${which}-engine`))).trim(), 'SIMD128');
     assert.equal(await page.textContent(tid(`keypoint-count-${which}`)), String(cliSift(i).keypoints.length));
   }
   for (const f of [7, 123, 1024]) {
     await settings('nndr', '0.8', f);
-    assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', String(f)]), `feature ${f}`);
+    await tupleIs(cliRet(['-a', 'nndr', '-t', '0.8', '1', String(f)]), `feature ${f}`);
   }
 });
 
@@ -186,22 +183,11 @@ test('default view (AVX2 build) equals the CLI with --opencv-lanes 8', async () 
   await idle();
   for (const f of [7, 500]) {
     await settings('nndr', '0.8', f);
-    const want = execFileSync(CLI, ['--opencv-lanes', '8', '-d', DATASET, 'get_info', '-a', 'nndr', '-t', '0.8', '1', String(f)], { cwd: ROOT, encoding: 'utf8' })
-      .split('\n').find((l) => l.startsWith('ret value: ')).slice(11);
-    assert.equal(await tuple(), want);
+    await tupleIs(cliRet8(['-a', 'nndr', '-t', '0.8', '1', String(f)]), `feature ${f}`);
   }
 });
 
-// The app's default width (8 lanes, AVX2), whatever the host: what the lab manual's
-// examples and a plain link are computed with.
-function cliRet8(args) {
-  const out = execFileSync(CLI, ['--opencv-lanes', '8', '-d', DATASET, 'get_info', ...args], { cwd: ROOT, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
-  return out.split('\n').find((l) => l.startsWith('ret value: ')).slice('ret value: '.length);
-}
-
 test('the page opens on real KITTI frames 0/1, fetching only those two frames, with the attribution', async () => {
-  const fetched = [];
-  page.on('request', (r) => { if (/\/demo\//.test(r.url())) fetched.push(new URL(r.url()).pathname); });
   await page.goto(BASE);
   await idle();
   assert.match(await page.textContent('.slots'), /000000\.png[\s\S]*000001\.png/);
@@ -210,7 +196,9 @@ test('the page opens on real KITTI frames 0/1, fetching only those two frames, w
   assert.equal(await page.inputValue(tid('feature')), '1256');
   assert.equal(await tuple(), cliRet8(['-a', 'nndr', '-t', '0.8', '1', '1256']));
   assert.notEqual(await tuple(), '((0, 0), [], [])');
-  // Frames load lazily: of the 104 bundled frames, the page fetched the pair it shows.
+  // Frames load lazily: of the bundled frames, the page fetched the pair it shows (the
+  // page's and its workers' requests: the workers receive bytes, they fetch nothing).
+  const fetched = await page.evaluate(() => performance.getEntriesByType('resource').map((e) => new URL(e.name).pathname).filter((p) => p.startsWith('/demo/')));
   const frames = fetched.filter((u) => u.endsWith('.png')).sort();
   assert.deepEqual(frames, ['/demo/gray/00/image_0/000000.png', '/demo/gray/00/image_0/000001.png']);
   assert.ok(fetched.includes('/demo/index.txt'));
@@ -223,14 +211,13 @@ test('the page opens on real KITTI frames 0/1, fetching only those two frames, w
   assert.match(readme, /Creative Commons Attribution-NonCommercial-ShareAlike 3\.0/);
   assert.equal(await page.evaluate(async () => (await fetch('demo/poses/00.txt')).text()),
     fs.readFileSync(path.join(ROOT, DATASET, 'poses/00.txt'), 'utf8'));
-  await page.screenshot({ path: path.join(SHOTS, 'opening.png'), fullPage: true });
+  await page.screenshot(shot('opening.png'), { fullPage: true });
 });
 
 test('lab manual examples: each click shows the manual value beside siftlab\'s, equal (✓)', async () => {
   await page.goto(BASE);
   await idle();
-  const buttons = await page.$$('[data-testid^="manual-example-"]');
-  assert.equal(buttons.length, 7);
+  assert.equal(await page.count('[data-testid^="manual-example-"]'), 7);
   for (let i = 0; i < 7; i++) {
     const label = await page.textContent(tid(`manual-example-${i}`));
     const m = label.match(/get_info -a (\S+)(?: -t (\S+))? (\d+) (\d+)/);
@@ -252,7 +239,7 @@ test('lab manual examples: each click shows the manual value beside siftlab\'s, 
     assert.equal((await page.textContent(tid('manual-expected'))).trim(), want, `the manual's value for ${m[0]}`);
     assert.match(await page.textContent(tid('manual-mark')), /^✓/);
     assert.match(await page.getAttribute(tid(`manual-example-${i}`), 'class'), /active/);
-    if (i === 1) await page.screenshot({ path: path.join(SHOTS, 'manual-example.png'), fullPage: true });
+    if (i === 1) await page.screenshot(shot('manual-example.png'), { fullPage: true });
   }
 });
 
@@ -265,7 +252,7 @@ test('a link to the manual\'s Task 1 tuple opens on it, with the comparison', as
   assert.equal((await page.textContent(tid('manual-expected'))).trim(), want);
   assert.match(await page.textContent(tid('manual-mark')), /^✓/);
   assert.match(await page.textContent(tid('manual-compare')), /Task 1 \(dt\)/);
-  assert.match(page.url(), /\?src=demo&frame=150&feature=209&algo=dt&t=300$/);
+  assert.match(await page.url(), /\?src=demo&frame=150&feature=209&algo=dt&t=300$/);
 });
 
 test('a link to frames the demo lacks says which, and the app stays usable', async () => {
@@ -274,10 +261,10 @@ test('a link to frames the demo lacks says which, and the app stays usable', asy
   assert.match(await page.textContent(tid('error')),
     /FRAME_ID 130 needs frames 129 and 130: frames 129 and 130 are not in the demo, which has frames 0–99, 119, 120, 149, 150/);
   // Nothing else is shown under the link's settings, and the link stays as it was.
-  assert.equal(await page.$(tid('keypoint-count-cur')), null);
+  assert.equal(await page.has(tid('keypoint-count-cur')), false);
   assert.equal(await page.inputValue(tid('frame-id')), '130');
-  assert.match(page.url(), /frame=130/);
-  await page.screenshot({ path: path.join(SHOTS, 'missing-frame.png') });
+  assert.match(await page.url(), /frame=130/);
+  await page.screenshot(shot('missing-frame.png'));
   // One of the two missing.
   await page.goto(`${BASE}?src=demo&frame=119`);
   await page.waitForSelector(tid('error'));
@@ -285,24 +272,25 @@ test('a link to frames the demo lacks says which, and the app stays usable', asy
   // Usable: a FRAME_ID the demo has loads, and the message goes.
   await page.fill(tid('frame-id'), '120');
   await page.press(tid('frame-id'), 'Enter');
+  await page.waitForFunction(() => /000120\.png/.test(document.querySelector('.slots')?.textContent || ''), undefined, { timeout: 180000 });
   await idle();
-  assert.equal(await page.$(tid('error')), null);
+  assert.equal(await page.has(tid('error')), false);
   assert.equal(await tuple(), cliRet8(['-a', 'nndr', '-t', '0.8', '120', await page.inputValue(tid('feature'))]));
 });
 
-test('click-to-select picks the keypoint under the cursor', async () => {
+test('click-to-select picks the keypoint under the cursor; arrows step', async () => {
   await page.goto(`${BASE}?lanes=${LANES}`);
   await idle();
   const kps = cliSift(0).keypoints;
-  await page.locator(tid('overlay')).scrollIntoViewIfNeeded();
-  const box = await page.locator(tid('overlay')).boundingBox();
+  const box = await page.boundingBox(tid('overlay'));
   const [W, H] = [1241, 376 * 2]; // stacked: previous on top, current below
   assert.ok(box.y >= 0 && box.y + (376 * box.height) / H <= 900, `previous frame on screen: ${JSON.stringify(box)}`);
   for (const i of [3, 250, 999, kps.length - 1]) {
     const k = kps[i];
-    const x = box.x + (k.x * box.width) / W;
-    const y = box.y + (k.y * box.height) / H;
-    await page.mouse.click(x, y);
+    // WebDriver pointers move in whole CSS pixels: click the pixel that holds the keypoint.
+    const x = Math.round(box.x + (k.x * box.width) / W);
+    const y = Math.round(box.y + (k.y * box.height) / H);
+    await page.mouseClick(x, y);
     const got = Number(await page.inputValue(tid('feature')));
     // What is under the cursor: the keypoint nearest to the clicked point (the first on ties).
     const ix = ((x - box.x) * W) / box.width;
@@ -311,18 +299,16 @@ test('click-to-select picks the keypoint under the cursor', async () => {
     let bd = Infinity;
     kps.forEach((q, j) => { const d = (q.x - ix) ** 2 + (q.y - iy) ** 2; if (d < bd) { bd = d; best = j; } });
     assert.equal(got, best, `clicked keypoint ${i}`);
-    assert.ok(Math.hypot(kps[got].x - k.x, kps[got].y - k.y) < 1e-3 || bd < 1, `picked ${got} for ${i}`);
   }
   // Keyboard: focus the frames and step with the arrows.
   await page.focus('.stage');
   const f0 = Number(await page.inputValue(tid('feature')));
-  await page.keyboard.press('ArrowLeft');
+  await page.keyboard('ArrowLeft');
   assert.equal(Number(await page.inputValue(tid('feature'))), f0 - 1);
-  await page.keyboard.press('Home');
+  await page.keyboard('Home');
   assert.equal(await page.inputValue(tid('feature')), '0');
   await page.check(tid('show-all'));
-  await page.mouse.click(box.x + (kps[250].x * box.width) / W, box.y + (kps[250].y * box.height) / H);
-  await page.screenshot({ path: path.join(SHOTS, 'click-select.png') });
+  await page.screenshot(shot('click-select.png'));
 });
 
 function crc32(buf) {
@@ -353,9 +339,9 @@ test('bad files and folders show an inline error and keep what was loaded', asyn
   const before = await tuple();
   const countCur = await page.textContent(tid('keypoint-count-cur'));
   const cases = [
-    [{ name: 'notes.txt', mimeType: 'text/plain', buffer: Buffer.from('hello, not an image') }, /not an image/],
-    [{ name: 'truncated.png', mimeType: 'image/png', buffer: fs.readFileSync(FRAME(2)).subarray(0, 20000) }, /corrupt or truncated/],
-    [{ name: 'huge.png', mimeType: 'image/png', buffer: pngDeclaring(5000, 4000) }, /20000000 pixels, above the limit of 16000000/],
+    [{ name: 'notes.txt', buffer: Buffer.from('hello, not an image') }, /not an image/],
+    [{ name: 'truncated.png', buffer: fs.readFileSync(FRAME(2)).subarray(0, 20000) }, /corrupt or truncated/],
+    [{ name: 'huge.png', buffer: pngDeclaring(5000, 4000) }, /20000000 pixels, above the limit of 16000000/],
   ];
   for (const [file, message] of cases) {
     await page.setInputFiles(tid('frame-cur'), file);
@@ -364,8 +350,10 @@ test('bad files and folders show an inline error and keep what was loaded', asyn
     assert.match(await page.textContent(tid('error')), message);
     assert.equal(await tuple(), before, 'the previous result stays');
     assert.equal(await page.textContent(tid('keypoint-count-cur')), countCur);
+    await page.click(`${tid('error')} button.link`);
+    await page.waitForSelector(tid('error'), { state: 'detached' });
   }
-  await page.screenshot({ path: path.join(SHOTS, 'error.png') });
+  await page.screenshot(shot('error.png'));
   // A folder without the MyKITTI layout.
   const junk = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-e2e-'));
   fs.writeFileSync(path.join(junk, 'readme.txt'), 'not a dataset');
@@ -374,7 +362,7 @@ test('bad files and folders show an inline error and keep what was loaded', asyn
   assert.equal(await tuple(), before);
   // The real layout works, and a missing frame is named.
   await page.setInputFiles(tid('folder'), path.join(ROOT, DATASET));
-  await page.waitForSelector(tid('error'), { state: 'detached' });
+  await page.waitForSelector(tid('error'), { state: 'detached', timeout: 60000 });
   await idle();
   assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', '42']));
   await page.fill(tid('frame-id'), '130');
@@ -383,17 +371,32 @@ test('bad files and folders show an inline error and keep what was loaded', asyn
     'FRAME_ID 130 needs frames 129 and 130: frames 129 and 130 are not in the folder, which has frames 0–99, 119, 120, 149, 150'), tid('error'));
   await page.fill(tid('frame-id'), '3');
   await page.press(tid('frame-id'), 'Enter');
-  await page.waitForFunction(() => /000003\.png/.test(document.querySelector('.slots')?.textContent || ''));
+  await page.waitForFunction(() => /000003\.png/.test(document.querySelector('.slots')?.textContent || ''), undefined, { timeout: 180000 });
   await idle();
   assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '3', '42']));
-  assert.equal(await page.$(tid('error')), null, 'a pair that is there settles the message');
+  assert.equal(await page.has(tid('error')), false, 'a pair that is there settles the message');
   // And a good file after the bad ones: the app still works.
   await page.setInputFiles(tid('frame-cur'), FRAME(5));
-  await page.waitForFunction((sel) => /000005\.png/.test(document.querySelector(sel)?.textContent || ''), '.slots');
+  await page.waitForFunction((sel) => /000005\.png/.test(document.querySelector(sel)?.textContent || ''), '.slots', { timeout: 180000 });
   await idle();
   assert.equal(await page.textContent(tid('keypoint-count-cur')), String(cliSift(5).keypoints.length));
   assert.ok((await tuple()).startsWith('(('));
   fs.rmSync(junk, { recursive: true });
+});
+
+test('two frames by picker and by drag and drop equal the CLI on that pair', async () => {
+  await page.goto(`${BASE}?lanes=${LANES}&algo=nndr&t=0.8&feature=42`);
+  await idle();
+  await page.setInputFiles(tid('frame-prev'), FRAME(7));
+  await page.waitForFunction(() => /000007\.png/.test(document.querySelector('.slots')?.textContent || ''), undefined, { timeout: 180000 });
+  // The current frame dropped onto its slot, as a file dragged from the desktop.
+  await page.dropFile('.slot:nth-child(2)', FRAME(8));
+  await page.waitForFunction(() => /000008\.png/.test(document.querySelector('.slots')?.textContent || ''), undefined, { timeout: 180000 });
+  await idle();
+  assert.equal(await page.textContent(tid('keypoint-count-prev')), String(cliSift(7).keypoints.length));
+  assert.equal(await page.textContent(tid('keypoint-count-cur')), String(cliSift(8).keypoints.length));
+  await settings('nndr', '0.8', 42);
+  await tupleIs(cliRet(['-a', 'nndr', '-t', '0.8', '8', '42']));
 });
 
 test('check my answer and a seeded exercise', async () => {
@@ -409,7 +412,7 @@ test('check my answer and a seeded exercise', async () => {
   await page.fill(tid('answer'), wrong);
   await page.click(tid('check'));
   assert.match(await page.textContent(tid('check-result')), /int\(\)/);
-  await page.screenshot({ path: path.join(SHOTS, 'selfcheck.png'), fullPage: true });
+  await page.screenshot(shot('selfcheck.png'), { fullPage: true });
   // Exercises: start, answer with the CLI's output, score.
   await page.click(tid('exercise-start'));
   await page.waitForFunction((sel) => /get_info -a \S+ .*\d+ \d+\?/.test(document.querySelector(sel)?.textContent || ''), tid('question'), { timeout: 180000 });
@@ -421,25 +424,23 @@ test('check my answer and a seeded exercise', async () => {
   await page.click('.exercises button[type=submit]');
   assert.match(await page.textContent('.exercises ' + tid('check-result')), /Correct/);
   assert.equal(await page.textContent(tid('score')), 'Score: 1 / 1');
-  const link = page.url();
+  const link = await page.url();
   assert.match(link, /ex=\d+&q=1/);
-  await page.screenshot({ path: path.join(SHOTS, 'exercise.png'), fullPage: true });
+  await page.screenshot(shot('exercise.png'), { fullPage: true });
   // The same link gives the same question.
-  const p2 = await context.newPage();
-  await p2.goto(link);
-  await p2.waitForFunction((sel) => /get_info -a \S+ .*\d+ \d+\?/.test(document.querySelector(sel)?.textContent || ''), tid('question'), { timeout: 180000 });
-  assert.equal(await p2.textContent(tid('question')), q);
-  await p2.close();
+  await page.goto(link);
+  await page.waitForFunction((sel) => /get_info -a \S+ .*\d+ \d+\?/.test(document.querySelector(sel)?.textContent || ''), tid('question'), { timeout: 180000 });
+  assert.equal(await page.textContent(tid('question')), q);
 });
 
 test('narrow screen layout', async () => {
   await page.setViewportSize({ width: 760, height: 1000 });
   await page.goto(`${BASE}?lanes=${LANES}&feature=300`);
   await idle();
-  await page.screenshot({ path: path.join(SHOTS, 'narrow.png'), fullPage: true });
+  await page.screenshot(shot('narrow.png'), { fullPage: true });
 });
 
-test('visual odometry on the bundled frames 0 to 99 equals the CLI view_trajectory 99', async () => {
+test(`visual odometry on the bundled frames 0 to ${VO_LAST} equals the CLI view_trajectory ${VO_LAST}`, async () => {
   await page.goto(`${BASE}?lanes=${LANES}`);
   await idle();
   // The lab's count: view_trajectory FRAME_ID runs frames 0 … FRAME_ID; the demo's
@@ -449,23 +450,25 @@ test('visual odometry on the bundled frames 0 to 99 equals the CLI view_trajecto
   while (ids.includes(last + 1)) last++;
   assert.equal(last, 99);
   assert.equal(await page.inputValue(tid('vo-frame-id')), String(last));
-  assert.equal(await page.textContent(tid('vo-range')), `frames 0 to ${last} (${last + 1} frames) · available: frames 0 to ${last}`);
+  await page.fill(tid('vo-frame-id'), String(VO_LAST));
+  await page.waitForFunction(([sel, w]) => document.querySelector(sel)?.textContent === w,
+    [tid('vo-range'), `frames 0 to ${VO_LAST} (${VO_LAST + 1} frames) · available: frames 0 to ${last}`]);
   await page.click(tid('vo-run'));
-  await page.waitForSelector(tid('vo-ate'), { timeout: 600000 });
+  await page.waitForSelector(tid('vo-ate'), { timeout: 900000 });
   const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-'));
   // The CLI reports the trajectory error with its progress (stdout or stderr: read both).
-  const vo = spawnSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', String(last)], { cwd: tmp, encoding: 'utf8' });
+  const vo = spawnSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', String(VO_LAST)], { cwd: tmp, encoding: 'utf8' });
   assert.equal(vo.status, 0, vo.stderr);
   const ate = (vo.stdout + vo.stderr).match(/trajectory error \(ATE RMSE, (\d+) frames\): ([\d.]+) m/);
-  assert.equal(ate[1], String(last + 1));
+  assert.equal(ate[1], String(VO_LAST + 1));
   assert.equal(await page.textContent(tid('vo-ate')), `${ate[2]} m`);
-  assert.match(await page.textContent(tid('vo-progress')), new RegExp(`frame ${last + 1} / ${last + 1}`));
-  metrics.voChromium = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
+  assert.match(await page.textContent(tid('vo-progress')), new RegExp(`frame ${VO_LAST + 1} / ${VO_LAST + 1}`));
+  metrics.vo = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
   // The lab's window as a PNG: the same bytes the CLI writes.
-  const [download] = await Promise.all([page.waitForEvent('download'), page.click(tid('vo-download'))]);
-  const png = fs.readFileSync(await download.path());
-  assert.ok(png.equals(fs.readFileSync(path.join(tmp, 'trajectory.png'))), 'trajectory.png differs from the CLI');
-  await page.locator('.trajectory').screenshot({ path: path.join(SHOTS, 'trajectory.png') });
+  const png = await page.download(() => page.click(tid('vo-download')));
+  assert.equal(png.name, 'trajectory.png');
+  assert.ok(png.bytes.equals(fs.readFileSync(path.join(tmp, 'trajectory.png'))), 'trajectory.png differs from the CLI');
+  await page.elementScreenshot('.trajectory', shot('trajectory.png'));
   fs.rmSync(tmp, { recursive: true });
   // Past the run: refused with the reason, nothing read.
   await page.fill(tid('vo-frame-id'), '120');
@@ -496,11 +499,10 @@ test('view_feature and view_info exports equal the CLI PNGs byte for byte', asyn
   const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-png-'));
   for (const [cmd, id, file] of [['view_feature', 'export-feature', 'opencv_visual.png'], ['view_info', 'export-info', 'custom_visual.png']]) {
     execFileSync(CLI, ['-d', path.join(ROOT, DATASET), cmd, '-a', 'dt', '-t', '280', '1', '42'], { cwd: tmp, encoding: 'utf8' });
-    const [download] = await Promise.all([page.waitForEvent('download'), page.click(tid(id))]);
-    assert.equal(download.suggestedFilename(), file);
-    const png = fs.readFileSync(await download.path());
-    assert.ok(png.equals(fs.readFileSync(path.join(tmp, file))), `${file} differs from the CLI's`);
-    fs.copyFileSync(await download.path(), path.join(SHOTS, `export-${file}`));
+    const got = await page.download(() => page.click(tid(id)));
+    assert.equal(got.name, file);
+    assert.ok(got.bytes.equals(fs.readFileSync(path.join(tmp, file))), `${file} differs from the CLI's`);
+    fs.writeFileSync(shot(`export-${file}`), got.bytes);
   }
   fs.rmSync(tmp, { recursive: true });
 });
@@ -515,58 +517,64 @@ function cliTrajectory(args) {
   return out;
 }
 
-test('odometry with the student\'s matcher (nndr 0.8, frames 0-99) equals the CLI: metrics, plot SVG', async () => {
+test(`odometry with the student's matcher (nndr 0.8, frames 0-${VO_LAST}) equals the CLI: metrics, plot SVG`, async () => {
   await page.goto(`${BASE}?lanes=${LANES}`);
   await idle();
   await page.selectOption(tid('vo-tracker'), 'nndr');
   assert.equal(await page.inputValue(tid('vo-threshold')), '0.8');
+  await page.fill(tid('vo-frame-id'), String(VO_LAST));
   await page.click(tid('vo-run'));
-  await page.waitForSelector(tid('vo-metrics'), { timeout: 600000 });
-  const ref = cliTrajectory(['-a', 'nndr', '-t', '0.8', '99']);
-  // stderr: "nndr 0.8 (100 frames): ATE … · KITTI …", the page shows the same summary.
-  const line = ref.stderr.split('\n').find((l) => l.startsWith('nndr 0.8 (100 frames): '));
-  assert.equal(await page.textContent(tid('vo-metrics')), line.slice('nndr 0.8 (100 frames): '.length));
+  await page.waitForSelector(tid('vo-metrics'), { timeout: 900000 });
+  const ref = cliTrajectory(['-a', 'nndr', '-t', '0.8', String(VO_LAST)]);
+  // stderr: "nndr 0.8 (N frames): ATE … · KITTI …", the page shows the same summary.
+  const head = `nndr 0.8 (${VO_LAST + 1} frames): `;
+  const line = ref.stderr.split('\n').find((l) => l.startsWith(head));
+  assert.equal(await page.textContent(tid('vo-metrics')), line.slice(head.length));
   assert.equal(await page.textContent(tid('vo-ate')), `${ref.metrics.ate_rmse.toFixed(4)} m`);
-  metrics.voMatchedChromium = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
+  metrics.voMatched = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
   // The figures are the core's: the exported SVG is the CLI's --plot, byte for byte
   // (so every position agrees to the plot's 0.01 px).
-  const [download] = await Promise.all([page.waitForEvent('download'), page.click(tid('vo-svg'))]);
-  assert.equal(download.suggestedFilename(), 'vo.svg');
-  fs.copyFileSync(await download.path(), path.join(SHOTS, 'vo-export.svg'));
-  assert.ok(fs.readFileSync(await download.path()).equals(ref.svg), 'the app\'s SVG differs from the CLI\'s --plot');
-  const [pngDownload] = await Promise.all([page.waitForEvent('download'), page.click(tid('vo-png'))]);
-  const png = fs.readFileSync(await pngDownload.path());
-  assert.deepEqual([...png.subarray(1, 4)].map((c) => String.fromCharCode(c)).join(''), 'PNG');
-  fs.copyFileSync(await pngDownload.path(), path.join(SHOTS, 'vo-export.png'));
+  const svg = await page.download(() => page.click(tid('vo-svg')));
+  assert.equal(svg.name, 'vo.svg');
+  fs.writeFileSync(shot('vo-export.svg'), svg.bytes);
+  assert.ok(svg.bytes.equals(ref.svg), 'the app\'s SVG differs from the CLI\'s --plot');
+  const png = await page.download(() => page.click(tid('vo-png')));
+  assert.equal(png.bytes.subarray(1, 4).toString('latin1'), 'PNG');
+  fs.writeFileSync(shot('vo-export.png'), png.bytes);
   // Hover over the top view names a frame, its position and error.
-  const box = await page.locator(`${tid('vo-plot')}`).boundingBox();
-  await page.mouse.move(box.x + box.width / 2, box.y + box.height * 0.3);
+  const box = await page.boundingBox(tid('vo-plot'));
+  await page.mouseMove(box.x + box.width / 2, box.y + box.height * 0.3);
+  await page.waitForFunction((sel) => /^frame \d+ · /.test(document.querySelector(sel)?.textContent || ''), tid('vo-hover'));
   assert.match(await page.textContent(tid('vo-hover')), /^frame \d+ · x=-?[\d.]+ y=-?[\d.]+ z=-?[\d.]+ m · error [\d.]+ m$/);
-  await page.locator('.trajectory .vo-views').screenshot({ path: path.join(SHOTS, 'vo-matched.png') });
+  await page.elementScreenshot('.trajectory .vo-views', shot('vo-matched.png'));
 });
 
-test('comparison view: LK, dt 200, nn, nndr 0.8 on frames 0-99, metrics equal the CLI\'s', async () => {
+test(`comparison view: LK, dt 200, nn, nndr 0.8 on frames 0-${VO_LAST}, metrics equal the CLI's`, async () => {
   await page.goto(`${BASE}?lanes=${LANES}`);
   await idle();
+  await page.fill(tid('vo-frame-id'), String(VO_LAST));
+  const t0 = Date.now();
   await page.click(tid('vo-compare-run'));
-  await page.waitForFunction((sel) => document.querySelector(sel)?.textContent === '4 runs done', tid('vo-compare-status'), { timeout: 900000 });
-  const rows = await page.$$eval(tid('vo-compare-row'), (trs) => trs.map((tr) => [...tr.children].map((td) => td.textContent)));
+  await page.waitForFunction((sel) => document.querySelector(sel)?.textContent === '4 runs done', tid('vo-compare-status'), { timeout: 1800000, what: 'the four runs' });
+  metrics.compareWallS = (Date.now() - t0) / 1000;
+  const rows = await page.evalAll(tid('vo-compare-row'), (tr) => [...tr.children].map((td) => td.textContent));
   assert.deepEqual(rows.map((r) => r[0]), ['LK', 'dt 200', 'nn', 'nndr 0.8']);
   const args = { LK: [], 'dt 200': ['-a', 'dt', '-t', '200'], nn: ['-a', 'nn'], 'nndr 0.8': ['-a', 'nndr', '-t', '0.8'] };
-  metrics.compareChromiumFps = {};
+  metrics.compareFps = {};
   // All four equal the CLI, dt 200 included: its frame-96 RANSAC sample is one where the
   // last bit of hypot picks the model, and the core computes hypot itself so that the
   // browser's and the CLI's agree (core/tests/essential_matrix.rs, docs/fidelity.md §VO-8).
   for (const r of rows) {
-    const m = cliTrajectory([...args[r[0]], '99']).metrics;
-    assert.deepEqual(r.slice(1, 7), [m.ate_rmse.toFixed(4), m.ate_rmse_aligned.toFixed(4), m.rpe_trans_rmse.toFixed(4), m.rpe_rot_rmse_deg.toFixed(4), 'n/a', 'n/a'], r[0]);
-    metrics.compareChromiumFps[r[0]] = Number(r[7]);
+    const m = cliTrajectory([...args[r[0]], String(VO_LAST)]).metrics;
+    assert.deepEqual(r.slice(1, 5), [m.ate_rmse.toFixed(4), m.ate_rmse_aligned.toFixed(4), m.rpe_trans_rmse.toFixed(4), m.rpe_rot_rmse_deg.toFixed(4)], r[0]);
+    assert.deepEqual(r.slice(5, 7), ['n/a', 'n/a'], `${r[0]}: under 100 m of path, no KITTI segment`);
+    metrics.compareFps[r[0]] = Number(r[7]);
   }
   // Truth and four runs overlaid, with a legend naming them.
-  const svg = await page.locator(tid('vo-compare-plot')).innerHTML();
+  const svg = await page.innerHTML(tid('vo-compare-plot'));
   for (const name of ['ground truth', 'LK', 'dt 200', 'nn', 'nndr 0.8']) assert.ok(svg.includes(`>${name}</text>`), name);
   assert.equal((svg.match(/<polyline/g) || []).length, 5);
-  await page.locator('.vo-compare').screenshot({ path: path.join(SHOTS, 'vo-compare.png') });
+  await page.elementScreenshot('.vo-compare', shot('vo-compare.png'));
 });
 
 test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, anatomy)', async () => {
@@ -590,12 +598,12 @@ test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, 
     metrics.wholeFrame[`${algo} ${t || 'none'}`] = want;
     if (algo === 'nndr') {
       metrics.sweepStatus = (await page.textContent(tid('wf-status'))).trim();
-      await page.locator('.see-inside').screenshot({ path: path.join(SHOTS, 'whole-frame.png') });
+      await page.elementScreenshot('.see-inside', shot('whole-frame.png'));
     }
   }
   metrics.crossings120 = (await page.textContent(tid('crossings'))).trim();
   // The view is in the link: see=matches and the current setting.
-  assert.match(page.url(), /see=matches/);
+  assert.match(await page.url(), /see=matches/);
 
   // The anatomy of the previous frame of the demo's first pair, against `siftlab anatomy`.
   await page.goto(`${BASE}?lanes=${LANES}&src=demo&frame=1&see=anatomy&kp=0`);
@@ -608,9 +616,9 @@ test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, 
   for (const [reason, n] of Object.entries(want.stages[1].dropped)) {
     assert.equal(await page.getAttribute(`${tid('funnel')} li[data-drop="${reason}"]`, 'data-count'), String(n), reason);
   }
-  assert.equal(await page.locator(`${tid('pyramid')} canvas.level`).count(), want.octaves * 11);
-  await page.waitForSelector(tid('orientation-hist'));
+  assert.equal(await page.count(`${tid('pyramid')} canvas.level`), want.octaves * 11);
+  await page.waitForSelector(tid('orientation-hist'), { timeout: 180000 });
   metrics.anatomyStatus = (await page.textContent(tid('anatomy-status'))).trim();
-  await page.locator('.see-inside').screenshot({ path: path.join(SHOTS, 'anatomy.png') });
+  await page.elementScreenshot('.see-inside', shot('anatomy.png'));
   fs.rmSync(tmp, { recursive: true });
 });
