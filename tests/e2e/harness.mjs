@@ -186,8 +186,8 @@ class Page {
   async evaluate(fn, arg) {
     const r = await this.d.executeAsyncScript(
       `const done = arguments[arguments.length - 1];
-       try { Promise.resolve((${fn})(arguments[0])).then((v) => done({ ok: v === undefined ? null : v }), (e) => done({ err: String(e && e.stack || e) })); }
-       catch (e) { done({ err: String(e && e.stack || e) }); }`, arg === undefined ? null : arg);
+       try { Promise.resolve((${fn})(arguments[0])).then((v) => done({ ok: v === undefined ? null : v }), (e) => done({ err: String(e) + (e && e.stack ? " at " + e.stack : "") })); }
+       catch (e) { done({ err: String(e) + (e && e.stack ? " at " + e.stack : "") }); }`, arg === undefined ? null : arg);
     if (r.err) throw new Error(`in the page: ${r.err}`);
     return r.ok;
   }
@@ -237,7 +237,9 @@ class Page {
   }
   /** `fn` mapped over every match of `sel`, in the page. */
   async evalAll(sel, fn) {
-    return this.evaluate(([s, f]) => [...document.querySelectorAll(s)].map(eval(f)), [sel, String(fn)]);
+    // Spliced into the script's source: the page's CSP forbids eval() (WebKit enforces it on
+    // the driver's scripts too).
+    return this.evaluate(`(s) => [...document.querySelectorAll(s)].map(${fn})`, sel);
   }
 
   async element(sel) {
@@ -364,18 +366,30 @@ class Page {
     const base = path.basename(file);
     const list = walk(file).map((f) => ({ url: '/__e2e/fs' + f, rel: base + '/' + path.relative(file, f).split(path.sep).join('/') }));
     await this.evaluate(async ([s, files]) => {
+      // A File made in the page has an empty webkitRelativePath, and an own property on it
+      // does not survive (WebKit may hand the FileList's files out as new wrappers). So
+      // each file gets a unique lastModified stamp, and the getter answers by that stamp.
+      if (!window.__e2eRel) {
+        window.__e2eRel = new Map();
+        window.__e2eStamp = 1e12;
+        const native = Object.getOwnPropertyDescriptor(File.prototype, 'webkitRelativePath');
+        Object.defineProperty(File.prototype, 'webkitRelativePath', {
+          configurable: true,
+          get() { return window.__e2eRel.get(this.lastModified) ?? native.get.call(this); },
+        });
+      }
       const dt = new DataTransfer();
       for (const f of files) {
         const blob = await (await fetch(f.url)).blob();
-        const name = f.rel.split('/').pop();
-        const fileObj = new File([blob], name, { type: blob.type });
-        Object.defineProperty(fileObj, 'webkitRelativePath', { value: f.rel });
-        dt.items.add(fileObj);
+        const stamp = window.__e2eStamp++;
+        window.__e2eRel.set(stamp, f.rel);
+        dt.items.add(new File([blob], f.rel.split('/').pop(), { type: blob.type, lastModified: stamp }));
       }
       const input = document.querySelector(s);
       input.files = dt.files;
-      // The FileList holds the same File objects, relative paths included; check it.
-      if (input.files.length && !input.files[0].webkitRelativePath) throw new Error('relative paths lost');
+      if (input.files.length !== files.length || (files.length && input.files[0].webkitRelativePath !== files[0].rel)) {
+        throw new Error('the FileList lost files or their relative paths');
+      }
       input.dispatchEvent(new Event('change', { bubbles: true }));
     }, [sel, list]);
   }
