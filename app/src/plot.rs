@@ -4,7 +4,21 @@
 
 use siftlab_core::matching::Verdict;
 use siftlab_core::pyfmt::py_float;
+use siftlab_core::render::palette::{hex, Marker, Style};
 use siftlab_core::sift::KeyPoint;
+
+/// How the app paints a style's marker path: (fill, stroke, stroke width).
+/// Over photographs markers are outlines in the colour (a fill would hide the
+/// point); on white they are filled and ringed in black as the core's figures
+/// draw them. A cross is always strokes of its colour.
+pub fn marker_paint(st: &Style, outline: bool) -> (String, String, &'static str) {
+    match st.marker {
+        Marker::None => ("none".into(), "none".into(), "0"),
+        Marker::Cross => ("none".into(), hex(st.color), "2"),
+        _ if outline => ("none".into(), hex(st.color), "1.5"),
+        _ => (hex(st.color), "#000000".into(), "1"),
+    }
+}
 
 /// The odometry's live progress: `frame n / total`, with the rate so far
 /// while it runs (from two steps on).
@@ -175,6 +189,14 @@ mod tests {
 
     fn kp(x: f32, y: f32, size: f32, angle: f32) -> KeyPoint {
         KeyPoint { x, y, size, angle, response: 0.0, octave: 0 }
+    }
+
+    #[test]
+    fn markers_are_outlined_over_photographs() {
+        use siftlab_core::render::palette::{CORRECT, TRACKERS, WRONG};
+        assert_eq!(marker_paint(&CORRECT, true), ("none".into(), "#56b4e9".into(), "1.5"));
+        assert_eq!(marker_paint(&TRACKERS[1], false), ("#0072b2".into(), "#000000".into(), "1"));
+        assert_eq!(marker_paint(&WRONG, false).0, "none");
     }
 
     #[test]

@@ -121,14 +121,27 @@ pub fn chart_xmax(sweep: &Sweep) -> usize {
         .max(2)
 }
 
-/// A curve's polyline "x,y x,y …" (points without matches or truth are skipped).
-pub fn chart_points(curve: &Curve, xmax: usize, w: f64, h: f64) -> String {
+/// A curve's points in the chart (points without matches or truth are skipped).
+pub fn chart_xy(curve: &Curve, xmax: usize, w: f64, h: f64) -> Vec<(f64, f64)> {
     curve
         .sample(CHART_STEPS)
         .iter()
-        .filter_map(|(_, v)| Some(format!("{:.1},{:.1}", chart_x(v.matches, xmax, w), chart_y(v.precision()?, h))))
-        .collect::<Vec<_>>()
-        .join(" ")
+        .filter_map(|(_, v)| Some((chart_x(v.matches, xmax, w), chart_y(v.precision()?, h))))
+        .collect()
+}
+
+/// A curve's polyline "x,y x,y …".
+pub fn chart_points(curve: &Curve, xmax: usize, w: f64, h: f64) -> String {
+    chart_xy(curve, xmax, w, h).iter().map(|(x, y)| format!("{x:.1},{y:.1}")).collect::<Vec<_>>().join(" ")
+}
+
+/// Where a curve's markers go: `n` of its points, evenly spaced, curve `k`
+/// of three shifted by k/3 of a spacing so that curves that run together do
+/// not stack their markers. As x, y pairs for `Marker::svg_path`.
+pub fn marker_points(xy: &[(f64, f64)], n: usize, k: usize) -> Vec<f32> {
+    let step = xy.len().div_ceil(n.max(1)).max(1);
+    let phase = step * k / 3;
+    xy.iter().enumerate().filter(|(i, _)| i % step == phase).flat_map(|(_, p)| [p.0 as f32, p.1 as f32]).collect()
 }
 
 /// Where the curves cross (matches ≥ 20, to skip the noise of the first
@@ -225,6 +238,10 @@ mod tests {
         assert!((chart_x(10, 1000, 300.0) - 100.0).abs() < 1e-9);
         assert_eq!(chart_y(1.0, 200.0), 0.0);
         assert_eq!(chart_y(0.25, 200.0), 150.0);
+        let xy: Vec<(f64, f64)> = (0..12).map(|i| (i as f64, 0.0)).collect();
+        let at = |k| marker_points(&xy, 4, k).chunks(2).map(|p| p[0]).collect::<Vec<f32>>();
+        assert_eq!(at(0), [0.0, 3.0, 6.0, 9.0]);
+        assert_eq!(at(2), [2.0, 5.0, 8.0, 11.0]);
     }
 
     #[test]
@@ -246,24 +263,5 @@ mod tests {
         let bars = hist_bars(&[0.0, 5.0, 10.0], 30.0, 100.0, 10.0);
         assert_eq!(bars[1], (10.0, 50.0, 10.0, 50.0));
         assert_eq!(bars[2].3, 100.0);
-    }
-}
-
-/// An SVG path of small circles of radius `r` at the (x, y) pairs of `xy`.
-pub fn dots_path(xy: &[f32], r: f64) -> String {
-    let mut d = String::with_capacity(xy.len() * 16);
-    for p in xy.chunks_exact(2) {
-        let (x, y) = (p[0] as f64, p[1] as f64);
-        d.push_str(&format!("M{:.1} {y:.1}a{r} {r} 0 1 0 {:.1} 0a{r} {r} 0 1 0 {:.1} 0", x - r, 2.0 * r, -2.0 * r));
-    }
-    d
-}
-
-#[cfg(test)]
-mod path_tests {
-    #[test]
-    fn dots_are_two_arcs_each() {
-        assert_eq!(super::dots_path(&[10.0, 5.0], 2.0), "M8.0 5.0a2 2 0 1 0 4.0 0a2 2 0 1 0 -4.0 0");
-        assert_eq!(super::dots_path(&[], 2.0), "");
     }
 }

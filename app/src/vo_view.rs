@@ -50,10 +50,10 @@ pub struct RunResult {
 }
 
 impl RunResult {
-    /// The run as the core's figures draw it (name and colour by tracker).
+    /// The run as the core's figures draw it (name and style by tracker).
     pub fn plot_run(&self) -> Run {
-        let (name, color) = run_style(self.strategy.as_ref());
-        Run { name, color, positions: self.positions.clone() }
+        let (name, style) = run_style(self.strategy.as_ref());
+        Run { name, style, positions: self.positions.clone() }
     }
 }
 

@@ -124,8 +124,9 @@ fn lk_plot_png_and_bad_flags() {
     let img = image::open(&plot).unwrap().to_rgb8();
     assert_eq!(img.dimensions(), (720, 990));
     assert_eq!(img.get_pixel(2, 2).0, [255, 255, 255]);
-    // The truth (green) and the LK run (red) are drawn.
-    assert!(img.pixels().any(|p| p.0 == [0, 150, 0]) && img.pixels().any(|p| p.0 == [215, 25, 28]));
+    // The truth (black) and the LK run (the palette's vermillion) are drawn.
+    use siftlab_core::render::palette::{TRACKERS, TRUTH};
+    assert!(img.pixels().any(|p| p.0 == TRUTH.color) && img.pixels().any(|p| p.0 == TRACKERS[0].color));
 
     let o = siftlab(&["-d", "www/demo/MyKITTI", "view_trajectory", "-t", "0.8", "4"]);
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--algorithm"));

@@ -5,13 +5,15 @@
 //! its descriptor. Computed in a worker by the core's own pipeline.
 
 use super::canvas2d::{context, gray_rgba, put_rgba};
-use super::DescriptorGrid;
+use super::{swatch, DescriptorGrid, Sw};
 use crate::client::Frame;
 use crate::msg::FromWorker;
 use crate::msg_inside::{AnatomyData, InsideReply, InsideRequest, LevelThumb};
-use crate::seeinside::{dots_path, hist_bars, keypoint_place, level_rgba, level_value};
+use crate::plot::marker_paint;
+use crate::seeinside::{hist_bars, keypoint_place, level_rgba, level_value};
 use crate::state::{nearest_keypoint, Lab, Which};
 use leptos::prelude::*;
+use siftlab_core::render::palette::{Style, DROPS, STAGE_POINTS};
 use std::sync::Arc;
 use wasm_bindgen::JsCast;
 
@@ -35,7 +37,16 @@ fn drop_label(name: &str) -> &'static str {
     }
 }
 
-const DROP_COLOURS: [&str; 4] = ["#c04dff", "#ffcc00", "#2f9bff", "#ff5a36"];
+/// Points over the frame: outlines of the style's marker, one path per set.
+fn points_path(xy: &[f32], st: Style) -> impl IntoView {
+    let (fill, stroke, width) = marker_paint(&st, true);
+    view! { <path d=st.marker.svg_path(xy, 2.5) fill=fill stroke=stroke stroke-width=width class="anat-pts"/> }
+}
+
+/// A funnel entry's sample: the marker its points wear over the frame.
+fn marker_sample(st: Style) -> impl IntoView {
+    swatch(Sw { style: st, line: false, outline: true, label: "" }, true)
+}
 
 #[derive(Clone)]
 struct Shown(Arc<AnatomyData>, Frame);
@@ -109,7 +120,7 @@ pub fn AnatomyView() -> impl IntoView {
                         .map(|(j, (n, c))| {
                             view! {
                                 <li data-drop=n.clone() data-count=*c>
-                                    <span class=format!("sw drop-{}", j % 4)></span>
+                                    {marker_sample(DROPS[j % 4])}
                                     {format!(" − {c} {}", drop_label(n))}
                                 </li>
                             }
@@ -147,7 +158,7 @@ pub fn AnatomyView() -> impl IntoView {
                         .filter(|(_, &w)| w as usize == r)
                         .flat_map(|(p, _)| [p[0], p[1]])
                         .collect();
-                    view! { <path d=dots_path(&xy, 2.0) stroke=DROP_COLOURS[r] class="anat-drop"/> }
+                    points_path(&xy, DROPS[r])
                 })
                 .collect_view()
         });
@@ -156,7 +167,7 @@ pub fn AnatomyView() -> impl IntoView {
         });
         Some(view! {
             {dropped}
-            <path d=dots_path(pts, 2.0) class="anat-pts"/>
+            {points_path(pts, STAGE_POINTS)}
             {sel}
         })
     };
@@ -187,7 +198,10 @@ pub fn AnatomyView() -> impl IntoView {
             </div>
             {move || error.get().map(|e| view! { <p class="error" role="alert">{e}</p> })}
             {funnel}
-            <p class="muted">"Click a stage to draw its points; click the frame to pick a kept keypoint."</p>
+            <p class="muted legend">
+                "Click a stage to draw its points ("{marker_sample(STAGE_POINTS)}"); at “refined” the dropped candidates "
+                "are drawn too, one marker per reason as in the list. Click the frame to pick a kept keypoint."
+            </p>
             <div class="stage">
                 <canvas node_ref=canvas_ref data-testid="anatomy-canvas"></canvas>
                 <svg class="overlay" viewBox=view_box preserveAspectRatio="none" on:click=select_at>

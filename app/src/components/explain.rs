@@ -123,7 +123,7 @@ pub fn DistanceChart(analysis: Analysis) -> impl IntoView {
             </svg>
             <figcaption>
                 {format!(
-                    "The {shown} nearest of {n} distances (rank 0 = d1, the nearest), y from 0 to {:.0}; highlighted: kept by the strategy.",
+                    "The {shown} nearest of {n} distances (rank 0 = d1, the nearest), y from 0 to {:.0}; dark bars: kept by the strategy, light: not kept.",
                     ymax
                 )}
             </figcaption>

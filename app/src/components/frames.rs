@@ -2,22 +2,29 @@
 //! selected keypoint (scale and orientation), lines to its matches, and the
 //! green `view_info` circles at the `matching_info` coordinates.
 
-use super::Legend;
+use super::{Legend, Sw};
 use crate::client::Frame;
 use crate::plot::{key_step, keypoint_path, orientation, step_feature, to_composite};
 use crate::state::{nearest_keypoint, Lab, Which};
 use leptos::prelude::*;
+use siftlab_core::render::palette::{hex, Marker, Style, INFO, SELECTED, SERIES, SOLID};
 use wasm_bindgen::{Clamped, JsCast};
 
-/// Colours of successive match lines (drawMatchesKnn picks random ones; these
-/// stay readable on gray).
-const PALETTE: [&str; 6] = ["#ff5a36", "#2f9bff", "#ffcc00", "#c04dff", "#00d1b2", "#ff7ac6"];
-
-/// The frames' legend: swatch class and label.
-const LEGEND: &[(&str, &str)] = &[
-    ("sw-sel", " selected keypoint (circle = scale, line = orientation) "),
-    ("sw-line", " lines to its matches (drawMatchesKnn) "),
-    ("sw-info", " matching_info points (view_info) · "),
+/// The frames' legend: what each mark is, by its shape as much as its colour.
+const LEGEND: &[Sw] = &[
+    Sw {
+        style: SELECTED,
+        line: false,
+        outline: true,
+        label: " selected keypoint (circle = scale, line = orientation) ",
+    },
+    Sw {
+        style: Style { color: SERIES[0], dash: SOLID, marker: Marker::None },
+        line: true,
+        outline: true,
+        label: " lines to its matches (drawMatchesKnn) ",
+    },
+    Sw { style: INFO, line: false, outline: true, label: " matching_info points (view_info, dashed circles) ·" },
 ];
 
 /// Where the frames sit in the composite: the previous frame at (0, 0), the
@@ -151,9 +158,9 @@ pub fn FramesView() -> impl IntoView {
             .enumerate()
             .filter_map(|(i, m)| {
                 let k = c.features.keypoints.get(m.train_idx)?;
-                let col = PALETTE[i % PALETTE.len()];
+                let col = hex(SERIES[i % SERIES.len()]);
                 Some(view! {
-                    <line x1=q.x x2=k.x as f64 + l.dx y1=q.y y2=k.y as f64 + l.dy stroke=col class="match-line"/>
+                    <line x1=q.x x2=k.x as f64 + l.dx y1=q.y y2=k.y as f64 + l.dy stroke=col.clone() class="match-line"/>
                     <circle cx=k.x as f64 + l.dx cy=k.y as f64 + l.dy r="4" stroke=col class="match-end"/>
                 })
             })
@@ -162,10 +169,12 @@ pub fn FramesView() -> impl IntoView {
             let pts = info
                 .points
                 .iter()
-                .map(|&(x, y)| view! { <circle cx=x as f64 + l.dx cy=y as f64 + l.dy r="10" class="info-circle"/> })
+                .map(|&(x, y)| {
+                    view! { <circle cx=x as f64 + l.dx cy=y as f64 + l.dy r="10" class="info-circle" stroke-dasharray=INFO.dasharray()/> }
+                })
                 .collect_view();
             view! {
-                <circle cx=info.query.0 as f64 cy=info.query.1 as f64 r="10" class="info-circle"/>
+                <circle cx=info.query.0 as f64 cy=info.query.1 as f64 r="10" class="info-circle" stroke-dasharray=INFO.dasharray()/>
                 {pts}
             }
         });
@@ -182,7 +191,7 @@ pub fn FramesView() -> impl IntoView {
         <section class="card frames" aria-label="Frames">
             <div class="frames-head">
                 <h2>"3 · The two frames"</h2>
-                <Legend swatches=LEGEND tail="click the previous frame to pick the nearest keypoint"/>
+                <Legend swatches=LEGEND tail="click the previous frame to pick the nearest keypoint" dark=true/>
             </div>
             <div class="frames-labels muted">
                 <span>

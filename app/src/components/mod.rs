@@ -31,6 +31,7 @@ use crate::state::{Lab, Source};
 use crate::urlstate::UrlState;
 use leptos::prelude::*;
 use siftlab_core::matching::StrategyKind;
+use siftlab_core::render::palette::{hex, Style};
 
 /// The whole explorer for a given state (tests mount this with their own `Lab`).
 #[component]
@@ -170,13 +171,42 @@ pub fn App() -> impl IntoView {
     view! { <Explorer lab=lab/> }
 }
 
-/// A figure's legend: colour swatches (each an `sw` span with its own class,
-/// then its label) and a closing remark.
+/// One legend entry: the style, whether its sample is a line (else the
+/// marker alone, stroked with the style's dash), whether the figure draws its
+/// markers as outlines (over photographs) or filled (on white), and the label.
+#[derive(Clone, Copy)]
+pub struct Sw {
+    pub style: Style,
+    pub line: bool,
+    pub outline: bool,
+    pub label: &'static str,
+}
+
+/// A sample of a style as the figure draws it: its dash and its marker.
+/// Hidden from screen readers: the label beside it says the same in words.
+pub fn swatch(sw: Sw, dark: bool) -> impl IntoView {
+    let st = sw.style;
+    let (fill, stroke, width) = crate::plot::marker_paint(&st, sw.outline);
+    let line = sw.line.then(|| {
+        view! {
+            <line x1="1" x2="31" y1="7" y2="7" stroke=hex(st.color) stroke-width="2" stroke-dasharray=st.dasharray()/>
+        }
+    });
+    let marker_dash = if sw.line { None } else { st.dasharray() };
+    view! {
+        <svg class="sw-svg" class:dark=dark viewBox="0 0 32 14" width="32" height="14" aria-hidden="true" focusable="false">
+            {line}
+            <path d=st.marker.svg_path(&[16.0, 7.0], 4.5) fill=fill stroke=stroke stroke-width=width stroke-dasharray=marker_dash/>
+        </svg>
+    }
+}
+
+/// A figure's legend: each entry's sample (dash and marker) and label, then
+/// a closing remark. `dark` puts the samples on the dark ground of the
+/// photographs they are drawn over.
 #[component]
-fn Legend(swatches: &'static [(&'static str, &'static str)], tail: &'static str) -> impl IntoView {
-    let swatches = swatches
-        .iter()
-        .map(|&(class, label)| view! { <span class=format!("sw {class}")></span>{label} })
-        .collect_view();
-    view! { <p class="muted legend">{swatches}{tail}</p> }
+fn Legend(swatches: &'static [Sw], tail: &'static str, #[prop(optional)] dark: bool) -> impl IntoView {
+    let swatches =
+        swatches.iter().map(|&sw| view! { <span class="sw-item">{swatch(sw, dark)}{sw.label}</span> }).collect_view();
+    view! { <p class="muted legend">{swatches}" "{tail}</p> }
 }

@@ -1,7 +1,7 @@
 //! The lab's `view_trajectory FRAME_ID`: monocular visual odometry over frames
 //! 0 … FRAME_ID (FRAME_ID + 1 frames, as the lab counts) of the demo or a
 //! MyKITTI folder, computed by the core in workers, drawn as it grows (truth
-//! green, estimate red, as in the lab's window), with the trajectory error and
+//! solid, estimate dashed, in the palette's colours), with the trajectory error and
 //! the lab's window as a PNG to download. A menu swaps LK for the student's
 //! matcher (`vo::matched`); the metrics and the core's figures follow each run,
 //! and [`VoCompare`] runs all four trackers side by side.
@@ -151,7 +151,8 @@ pub fn TrajectoryView() -> impl IntoView {
             <p class="muted">
                 "The lab's monocular VO, "<code>"view_trajectory FRAME_ID"</code>", on frames 0 … FRAME_ID: SIFT keypoints of the first frame, Lucas–Kanade tracking, "
                 "essential matrix (5-point RANSAC), recoverPose, scale from the ground-truth poses. "
-                <span class="legend-gt">"green: ground truth"</span>", "<span class="legend-est">"red: estimate"</span>"."
+                "In the figures the ground truth is a black solid line, the estimate a dashed line with markers in "
+                "the tracker's colour (the legend names each)."
             </p>
             <div class="control-row">
                 <label class="ctl">

@@ -1,23 +1,27 @@
 //! Whole-frame matching: every match of the chosen strategy and threshold
-//! between the two frames, drawn over them in green (correct) or red
-//! (wrong) by the ground-truth epipolar geometry, with counts and precision;
+//! between the two frames, drawn over them by the core (correct: solid,
+//! circled ends; wrong: dashed, crossed ends) by the ground-truth epipolar
+//! geometry, with counts and precision;
 //! and the trade-off chart: precision against number of matches as each
 //! strategy's threshold sweeps its range. The sweep runs once per pair in a
 //! worker (the core's `matching::sweep`); thresholds then cost a binary search.
 
 use super::canvas2d::{context, put_rgba};
-use super::Legend;
+use super::{swatch, Legend, Sw};
 use crate::client::Frame;
 use crate::loading;
 use crate::msg::FromWorker;
 use crate::msg_inside::{InsideReply, InsideRequest, SweepData};
+use crate::plot::marker_paint;
 use crate::seeinside::{
-    chart_points, chart_x, chart_xmax, chart_y, counts_text, crossings_text, current, parse_px, rule_text,
+    chart_points, chart_x, chart_xmax, chart_xy, chart_y, counts_text, crossings_text, current, marker_points,
+    parse_px, rule_text,
 };
 use crate::state::Lab;
 use leptos::prelude::*;
 use siftlab_core::matching::DMatch;
 use siftlab_core::matching::StrategyKind;
+use siftlab_core::render::palette::{self, hex, CORRECT, UNJUDGED, WRONG};
 use siftlab_core::render::whole_frame;
 use std::sync::Arc;
 
@@ -25,13 +29,15 @@ use std::sync::Arc;
 /// has hundreds of thousands of candidates, which would paint the frames over.
 const MAX_LINES: usize = 20_000;
 
-/// The judged lines' legend: swatch class and label.
-const LEGEND: &[(&str, &str)] =
-    &[("sw-correct", " correct "), ("sw-wrong", " wrong "), ("sw-unjudged", " not judged (no poses) · ")];
+/// The judged lines' legend: the core's styles, as the canvas draws them.
+const LEGEND: &[Sw] = &[
+    Sw { style: CORRECT, line: true, outline: true, label: " correct (solid, circled ends) " },
+    Sw { style: WRONG, line: true, outline: true, label: " wrong (dashed, crossed ends) " },
+    Sw { style: UNJUDGED, line: true, outline: true, label: " not judged (no poses) ·" },
+];
 
-/// The curves in the lab's order (their colours are the CSS classes `curve-dt` …).
-const CURVE_COLOURS: [(StrategyKind, &str); 3] =
-    [(StrategyKind::Dt, "dt"), (StrategyKind::Nn, "nn"), (StrategyKind::Nndr, "nndr")];
+/// Markers along each curve of the trade-off chart.
+const CURVE_MARKS: usize = 7;
 
 #[derive(Clone)]
 struct Swept(Arc<SweepData>, Frame, Frame);
@@ -169,7 +175,7 @@ pub fn WholeFrameView() -> impl IntoView {
             </div>
             {move || error.get().map(|e| view! { <p class="error" role="alert">{e}</p> })}
             {counts}
-            <Legend swatches=LEGEND tail="the strategy and threshold are the ones chosen above"/>
+            <Legend swatches=LEGEND tail="the strategy and threshold are the ones chosen above" dark=true/>
             <div class="stage"><canvas node_ref=canvas_ref data-testid="wf-canvas"></canvas></div>
             <TradeoffChart swept=swept/>
         </div>
@@ -187,10 +193,24 @@ fn TradeoffChart(swept: RwSignal<Option<Swept>>) -> impl IntoView {
         }
         let sweep = &s.0.sweep;
         let xmax = chart_xmax(sweep);
-        let curves = CURVE_COLOURS
+        // Each strategy in its palette style (the odometry's tracker of the
+        // same name wears the same), with markers along the curve.
+        let curves = StrategyKind::ALL
             .iter()
-            .map(|&(k, _)| {
-                view! { <polyline points=chart_points(sweep.curve(k), xmax, w, h) class=format!("tcurve curve-{}", k.name())/> }
+            .enumerate()
+            .map(|(i, &k)| {
+                let st = palette::strategy(k);
+                let xy = chart_xy(sweep.curve(k), xmax, w, h);
+                let (fill, stroke, width) = marker_paint(&st, false);
+                view! {
+                    <polyline
+                        points=chart_points(sweep.curve(k), xmax, w, h)
+                        class=format!("tcurve curve-{}", k.name())
+                        stroke=hex(st.color)
+                        stroke-dasharray=st.dasharray()
+                    />
+                    <path d=st.marker.svg_path(&marker_points(&xy, CURVE_MARKS, i), 4.5) fill=fill stroke=stroke stroke-width=width/>
+                }
             })
             .collect_view();
         let marker = current(sweep, lab.algo.get(), &lab.threshold()).ok().and_then(|(v, _)| {
@@ -205,11 +225,12 @@ fn TradeoffChart(swept: RwSignal<Option<Swept>>) -> impl IntoView {
                 view! { <line x1=x x2=x y1=h y2=h + 5.0 class="tick"/><text x=x y=h + 18.0 class="tick-label">{t}</text> }
             })
             .collect_view();
-        let legend = CURVE_COLOURS
+        let legend = StrategyKind::ALL
             .iter()
-            .map(|&(k, _)| {
+            .map(|&k| {
                 let (lo, hi) = siftlab_core::matching::sweep::range(k);
-                view! { <span><span class=format!("sw curve-{}", k.name())></span>{format!(" {} ({lo}–{hi}) ", k.name())}</span> }
+                let sw = Sw { style: palette::strategy(k), line: true, outline: false, label: "" };
+                view! { <span class="sw-item">{swatch(sw, false)}{format!(" {} ({lo}–{hi}) ", k.name())}</span> }
             })
             .collect_view();
         let crossings = crossings_text(sweep);

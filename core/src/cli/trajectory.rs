@@ -95,8 +95,8 @@ pub fn view_trajectory(
         write(path, (metrics.to_json() + "\n").as_bytes(), "the metrics")?;
     }
     if let (Some(path), Some(svg)) = (opts.plot, svg) {
-        let (name, color) = run_style(opts.strategy.as_ref());
-        let scene = report_figure(&gt, &[Run { name, color, positions: est.clone() }], 720);
+        let (name, style) = run_style(opts.strategy.as_ref());
+        let scene = report_figure(&gt, &[Run { name, style, positions: est.clone() }], 720);
         let bytes =
             if svg { to_svg(&scene, None).into_bytes() } else { crate::render::encode_png(&rasterize(&scene))? };
         write(path, &bytes, "the plot")?;

@@ -20,6 +20,9 @@ pub(crate) mod draw;
 pub(crate) mod font;
 pub(crate) mod info;
 pub(crate) mod matches;
+// The colours, dashes and markers of every figure for people (the CLI's
+// plots and matches.png, the app): one palette, public for the app.
+pub mod palette;
 // The VO figures (axes, SVG, raster) the CLI and the app share: an API of its own.
 pub mod plot;
 pub(crate) mod trajectory;

@@ -1,9 +1,13 @@
 //! The whole-frame matching picture: both frames side by side (previous
 //! left, current right, as `drawMatches` lays them out) and one line per
-//! match, green when the ground-truth geometry calls it correct, red when
-//! wrong, blue when there is no ground truth.
+//! match in the palette's styles: solid with circled ends when the
+//! ground-truth geometry calls it correct, dashed with crossed ends when
+//! wrong (so the two differ in more than colour), yellow when there is no
+//! ground truth.
 
 use super::draw::{circle, line};
+use super::palette::{Marker, Style, CORRECT, UNJUDGED, WRONG};
+use super::plot::dash::segments;
 use super::RgbImage;
 use crate::error::{Error, Result};
 use crate::image::GrayImage;
@@ -11,13 +15,33 @@ use crate::matching::DMatch;
 use crate::sift::KeyPoint;
 use image::Rgb;
 
-pub const CORRECT: Rgb<u8> = Rgb([40, 200, 60]);
-pub const WRONG: Rgb<u8> = Rgb([230, 40, 40]);
-pub const UNJUDGED: Rgb<u8> = Rgb([60, 140, 255]);
+/// 4 fractional bits, as drawMatches draws.
+fn fx(v: f64) -> i64 {
+    (v * 16.0).round() as i64
+}
+
+/// One match: its line with the style's dash and a marker of radius 3 at each end.
+fn draw_match(out: &mut RgbImage, a: (f64, f64), b: (f64, f64), st: &Style) {
+    let c = Rgb(st.color);
+    for (p, q) in segments(&[a, b], st.dash) {
+        line(out, (fx(p.0), fx(p.1)), (fx(q.0), fx(q.1)), c, 1, true, 4);
+    }
+    for e in [a, b] {
+        match st.marker {
+            Marker::Cross => {
+                for (p, q) in Marker::cross(e, 4.0) {
+                    line(out, (fx(p.0), fx(p.1)), (fx(q.0), fx(q.1)), c, 1, true, 4);
+                }
+            }
+            _ => circle(out, (fx(e.0), fx(e.1)), 3 * 16, c, 1, true, 4),
+        }
+    }
+}
 
 /// Draws `matches` (query in `prev`, train in `cur`); `verdicts[i]` says
-/// whether match i is correct. Wrong matches are drawn first, so the
-/// correct ones stay visible where they cross.
+/// whether match i is correct. Wrong matches are drawn last: they are the
+/// few a student looks for among hundreds of correct ones, and their dashes
+/// leave gaps through which the correct lines beneath still show.
 pub fn draw(
     prev_image: &GrayImage,
     prev: &[KeyPoint],
@@ -34,15 +58,13 @@ pub fn draw(
     if verdicts.is_some_and(|v| v.len() != matches.len()) {
         return Err(Error::InvalidArgument("one verdict per match is needed".into()));
     }
-    let colour = |i: usize| match verdicts {
+    let style = |i: usize| match verdicts {
         None => UNJUDGED,
         Some(v) if v[i] => CORRECT,
         Some(_) => WRONG,
     };
     let mut order: Vec<usize> = (0..matches.len()).collect();
-    order.sort_by_key(|&i| verdicts.is_some_and(|v| v[i]));
-    // 4 fractional bits, as drawMatches draws.
-    let fx = |v: f32| (v * 16.0).round() as i64;
+    order.sort_by_key(|&i| verdicts.is_none_or(|v| !v[i]));
     for i in order {
         let m = matches[i];
         let (Some(a), Some(b)) = (prev.get(m.query_idx), cur.get(m.train_idx)) else {
@@ -54,11 +76,8 @@ pub fn draw(
                 cur.len()
             )));
         };
-        let c = colour(i);
-        let (pa, pb) = ((fx(a.x), fx(a.y)), (fx(b.x + w1 as f32), fx(b.y)));
-        circle(&mut out, pa, 3 * 16, c, 1, true, 4);
-        circle(&mut out, pb, 3 * 16, c, 1, true, 4);
-        line(&mut out, pa, pb, c, 1, true, 4);
+        let (pa, pb) = ((a.x as f64, a.y as f64), (b.x as f64 + w1 as f64, b.y as f64));
+        draw_match(&mut out, pa, pb, &style(i));
     }
     Ok(out)
 }
@@ -68,31 +87,38 @@ mod tests {
     use super::*;
 
     #[test]
-    fn lines_take_the_verdicts_colour() {
-        let img = GrayImage::new(20, 10, vec![0; 200]).unwrap();
+    fn lines_take_the_verdicts_style() {
+        let img = GrayImage::new(60, 20, vec![0; 1200]).unwrap();
         let kp = |x: f32, y: f32| KeyPoint { x, y, size: 2.0, angle: 0.0, response: 0.0, octave: 0 };
-        let (prev, cur) = (vec![kp(10.0, 2.0), kp(10.0, 7.0)], vec![kp(10.0, 2.0), kp(10.0, 7.0)]);
+        let (prev, cur) = (vec![kp(10.0, 3.0), kp(10.0, 14.0)], vec![kp(10.0, 3.0), kp(10.0, 14.0)]);
         let m = |q, t| DMatch { query_idx: q, train_idx: t, distance: 0.0 };
         let out = draw(&img, &prev, &img, &cur, &[m(0, 0), m(1, 1)], Some(&[true, false])).unwrap();
-        assert_eq!((out.width(), out.height()), (40, 10));
-        // Midway along each horizontal line (x = 20, the frames' seam): the
-        // anti-aliased line over black is the colour scaled by its coverage.
-        let hue = |p: &Rgb<u8>| {
-            let [r, g, b] = p.0;
-            if g > r && g > b {
-                "green"
-            } else if r > g && r > b {
-                "red"
-            } else if b > r && b > g {
-                "blue"
+        assert_eq!((out.width(), out.height()), (120, 20));
+        // Along each horizontal line from x = 10 to 70, the anti-aliased line
+        // over black is the colour scaled by its coverage: sky blue is blue >
+        // green > red, vermillion red > green > blue.
+        let order = |x: u32, y: u32| {
+            let [r, g, b] = out.get_pixel(x, y).0;
+            if b > g && g > r {
+                "sky blue"
+            } else if r > g && g > b {
+                "vermillion"
             } else {
                 "none"
             }
         };
-        assert_eq!(hue(out.get_pixel(20, 2)), "green");
-        assert_eq!(hue(out.get_pixel(20, 7)), "red");
+        // The correct line is solid; the wrong one dashed 8 on, 5 off from x = 10.
+        for x in [20, 33, 52] {
+            assert_eq!(order(x, 3), "sky blue", "x = {x}");
+        }
+        assert_eq!(order(27, 14), "vermillion");
+        assert_eq!(out.get_pixel(33, 14).0, [0, 0, 0], "a gap of the dashed line");
+        // Crossed ends for the wrong match (a corner of the ×), circled for the correct one.
+        assert_eq!(order(7, 17), "vermillion");
+        assert_eq!(order(10, 0), "sky blue");
         let plain = draw(&img, &prev, &img, &cur, &[m(0, 0)], None).unwrap();
-        assert_eq!(hue(plain.get_pixel(20, 2)), "blue");
+        let [r, g, b] = plain.get_pixel(38, 3).0;
+        assert!(r > b && g > b && b < 100, "yellow: {r} {g} {b}");
         assert!(draw(&img, &prev, &img, &cur, &[m(0, 5)], None).is_err());
     }
 }

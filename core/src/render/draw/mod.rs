@@ -44,6 +44,16 @@ pub fn circle(img: &mut RgbImage, center: (i64, i64), radius: i64, c: Rgb<u8>, t
     }
 }
 
+/// `cv2.fillConvexPoly(img, points, color, lineType, shift)`: the points
+/// carry `shift` fractional bits.
+pub fn fill_convex(img: &mut RgbImage, points: &[(i64, i64)], c: Rgb<u8>, aa: bool, shift: u32) {
+    let lim = 1i64 << 40;
+    if shift > XY_SHIFT || points.iter().any(|p| p.0.abs() > lim || p.1.abs() > lim) {
+        return;
+    }
+    fill::fill_convex_poly(img, points, c, aa, shift);
+}
+
 /// `cv2.line(img, pt1, pt2, color, thickness, lineType, shift)`.
 pub fn line(img: &mut RgbImage, p1: (i64, i64), p2: (i64, i64), c: Rgb<u8>, thickness: i64, aa: bool, shift: u32) {
     if shift > XY_SHIFT || !(0..=32767).contains(&thickness) {

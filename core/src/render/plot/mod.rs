@@ -8,12 +8,12 @@
 //! `render::trajectory`.
 
 pub mod axes;
+pub mod dash;
 pub mod figures;
 pub mod raster;
 pub mod svg;
 
-/// An sRGB colour.
-pub type Color = [u8; 3];
+pub use super::palette::{Color, Dash, Marker};
 
 /// Where a text's x is: its start, middle or end (SVG's `text-anchor`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -40,11 +40,13 @@ pub enum Shape {
         to: (f64, f64),
         color: Color,
         width: f64,
+        dash: Dash,
     },
     Polyline {
         points: Vec<(f64, f64)>,
         color: Color,
         width: f64,
+        dash: Dash,
     },
     /// A filled disc, optionally ringed.
     Circle {
@@ -52,6 +54,14 @@ pub enum Shape {
         r: f64,
         fill: Color,
         stroke: Option<Color>,
+    },
+    /// A point symbol of "radius" `r`, filled and ringed in black (a cross:
+    /// strokes of `fill`'s colour).
+    Mark {
+        center: (f64, f64),
+        r: f64,
+        marker: Marker,
+        fill: Color,
     },
     /// Text whose baseline starts, centres or ends at `at`; `size` is the
     /// glyph height in px (the raster font is 7 px a scale step).
@@ -101,11 +111,14 @@ impl Shape {
         let p = |(x, y): (f64, f64)| (x + dx, y + dy);
         match self.clone() {
             Shape::Rect { x, y, w, h, fill, stroke } => Shape::Rect { x: x + dx, y: y + dy, w, h, fill, stroke },
-            Shape::Line { from, to, color, width } => Shape::Line { from: p(from), to: p(to), color, width },
-            Shape::Polyline { points, color, width } => {
-                Shape::Polyline { points: points.into_iter().map(p).collect(), color, width }
+            Shape::Line { from, to, color, width, dash } => {
+                Shape::Line { from: p(from), to: p(to), color, width, dash }
+            }
+            Shape::Polyline { points, color, width, dash } => {
+                Shape::Polyline { points: points.into_iter().map(p).collect(), color, width, dash }
             }
             Shape::Circle { center, r, fill, stroke } => Shape::Circle { center: p(center), r, fill, stroke },
+            Shape::Mark { center, r, marker, fill } => Shape::Mark { center: p(center), r, marker, fill },
             Shape::Text { at, text, size, anchor, color } => Shape::Text { at: p(at), text, size, anchor, color },
         }
     }
@@ -115,7 +128,3 @@ pub const WHITE: Color = [255, 255, 255];
 pub const BLACK: Color = [0, 0, 0];
 pub const GRID: Color = [222, 222, 222];
 pub const AXIS: Color = [90, 90, 90];
-/// Ground truth, as in the lab's window (a darker green, legible on white).
-pub const TRUTH: Color = [0, 150, 0];
-/// One colour per run, in the app's comparison order: LK, dt, nn, nndr.
-pub const RUN_COLORS: [Color; 4] = [[215, 25, 28], [44, 123, 182], [253, 141, 60], [123, 50, 148]];
