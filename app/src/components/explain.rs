@@ -48,6 +48,7 @@ pub fn DescriptorGrid(
         })
         .collect_view();
     let rows = descriptor_rows(&desc);
+    let nums_label = format!("{title}: the 128 numbers");
     view! {
         <figure class="descriptor" data-testid=testid>
             <svg viewBox=format!("0 0 {} {}", CELL * 4.0, CELL * 4.0) class="desc-svg" role="img" aria-label=title.clone()>
@@ -56,7 +57,7 @@ pub fn DescriptorGrid(
             <figcaption>{title}</figcaption>
             <details>
                 <summary>"the 128 numbers"</summary>
-                <pre class="desc-nums">{rows}</pre>
+                <pre class="desc-nums" tabindex="0" role="region" aria-label=nums_label>{rows}</pre>
             </details>
         </figure>
     }

@@ -117,7 +117,8 @@ pub fn ResultPanel() -> impl IntoView {
                 )}
             </p>
             {(!m.is_empty()).then(|| view! {
-                <div class="table-wrap">
+                // Wider than a phone: it scrolls in its own region, which the keyboard can reach.
+                <div class="table-wrap" tabindex="0" role="region" aria-label="Matches of the selected feature">
                     <table class="matches" data-testid="match-table">
                         <thead>
                             <tr>
@@ -137,7 +138,7 @@ pub fn ResultPanel() -> impl IntoView {
             <h2>"4 · Result"</h2>
             <p class="muted">"What the lab's "<code>"get_info"</code>" prints as "<code>"ret value:"</code></p>
             <div class="tuple-row">
-                <code class="tuple" data-testid="result-tuple">{move || tuple().unwrap_or_default()}</code>
+                <code class="tuple" data-testid="result-tuple" tabindex="0" role="region" aria-label="ret value">{move || tuple().unwrap_or_default()}</code>
                 <button
                     class="copy"
                     on:click=copy
