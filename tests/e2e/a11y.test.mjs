@@ -1,4 +1,5 @@
-// Accessibility of the siftlab app in headless Chromium: in every state a student reaches
+// Accessibility of the siftlab app, in each engine (E2E_ENGINE: chromium, firefox, webkit;
+// tests/e2e/harness.mjs drives it over WebDriver): in every state a student reaches
 // (the demo's result, the exercises, both "see inside" views, the odometry and the
 // comparison after a run), at a laptop's width (1400 px) and a phone's (390 px), axe-core
 // reports no violation of WCAG 2.0/2.1 A and AA or its best practices, and the page never
@@ -8,57 +9,54 @@
 // them (Machado et al. 2009, severity 1.0, the same matrices core/src/render/palette
 // checks the palette with).
 //
-// Only goto, click, fill, selectOption, waitForSelector, waitForFunction, evaluate,
-// setViewportSize, screenshot, textContent and inputValue are used on the page, so the file
-// ports to a WebDriver adapter. Run: BASE_URL=http://127.0.0.1:PORT/ node --test
-// --test-concurrency=1 a11y.test.mjs (with the site in dist/ served on PORT).
+// Run: E2E_ENGINE=firefox node --test --test-concurrency=1 a11y.test.mjs (dist/ built;
+// tests/e2e/run.sh runs it in every engine, WebKit under xvfb-run).
 import { test, before, after, beforeEach, afterEach } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launch, serve, ROOT } from './harness.mjs';
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
-const BASE = process.env.BASE_URL || 'http://127.0.0.1:8080/';
-const SHOTS = path.join(HERE, 'screenshots');
+const ENGINE = process.env.E2E_ENGINE || 'chromium';
+const SHOTS = path.join(HERE, 'screenshots', ENGINE);
 fs.mkdirSync(SHOTS, { recursive: true });
-// The page's CSP allows no inline script, so axe goes in through evaluate (the DevTools
-// protocol, which the CSP does not govern) rather than a <script> tag.
+// The page's CSP allows no inline script, so axe goes in as a WebDriver script (which the
+// CSP does not govern) rather than a <script> tag.
 const AXE = fs.readFileSync(path.join(HERE, 'node_modules/axe-core/axe.min.js'), 'utf8');
 const TAGS = ['wcag2a', 'wcag2aa', 'wcag21a', 'wcag21aa', 'best-practice'];
 const WIDTHS = [1400, 390];
 // Frames 0 to 10: enough for the odometry's views, quick on two cores.
 const VO_FRAME_ID = '10';
 // The screenshots' comparison runs longer (frames 0 to 40), so that the lines part and
-// their dashes and markers show.
-const CVD_FRAME_ID = '40';
+// their dashes and markers show; WebKit (SIMD128 SIFT, ~3 s a frame) gets frames 0 to 10.
+const CVD_FRAME_ID = ENGINE === 'webkit' ? '10' : '40';
 const report = {};
 // A11Y_MEASURE_ONLY=1 records and prints every state without failing (to measure a build
 // that does not pass yet, e.g. the one before a fix).
 const MEASURE_ONLY = process.env.A11Y_MEASURE_ONLY === '1';
 
 let browser;
-let context;
+let server;
+let BASE;
 let page;
 
 before(async () => {
-  browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-           '--disable-component-update', '--disable-sync', '--disable-quic'],
-  });
+  server = await serve(path.join(ROOT, 'dist'));
+  BASE = server.base;
+  browser = await launch(ENGINE);
 });
 after(async () => {
   await browser?.close();
+  await server?.close();
   fs.writeFileSync(path.join(SHOTS, 'a11y.json'), JSON.stringify(report, null, 2));
 });
 beforeEach(async () => {
-  context = await browser.newContext({ viewport: { width: 1400, height: 900 } });
-  page = await context.newPage();
+  page = await browser.newPage({ width: 1400, height: 900 });
 });
 afterEach(async () => {
-  await context?.close();
+  assert.deepEqual(await page.flushErrors(), [], 'console errors');
 });
 
 const tid = (id) => `[data-testid="${id}"]`;
@@ -93,7 +91,7 @@ async function unreachableScrollers() {
 
 async function axe() {
   const loaded = await page.evaluate(() => typeof window.axe === 'object');
-  if (!loaded) await page.evaluate(AXE);
+  if (!loaded) await page.injectScript(AXE);
   return page.evaluate(async (tags) => {
     const r = await window.axe.run(document, { runOnly: { type: 'tag', values: tags }, resultTypes: ['violations'] });
     return r.violations.map((v) => ({ id: v.id, impact: v.impact, help: v.help, nodes: v.nodes.slice(0, 5).map((n) => n.target.join(' ')) }));
@@ -114,7 +112,7 @@ async function check(state) {
     report[state][width] = { overflowPx: over, violations: violations.length, scrollers };
     console.log(`${state} @ ${width}px: overflow ${over} px, ${violations.length} axe violations`
       + (violations.length ? `: ${JSON.stringify(violations, null, 1)}` : '') + (scrollers.length ? `; unreachable scrollers ${scrollers}` : ''));
-    await page.screenshot({ path: path.join(SHOTS, `a11y-${state}-${width}.png`), fullPage: true });
+    await page.screenshot(path.join(SHOTS, `a11y-${state}-${width}.png`), { fullPage: true });
     found.push({ width, over, scrollers, violations });
   }
   await page.setViewportSize({ width: 1400, height: 900 });
@@ -210,14 +208,8 @@ async function simulate(name) {
 async function cvdShots(sel, stem) {
   for (const name of [null, 'deuteranopia', 'protanopia']) {
     await simulate(name);
-    const clip = await page.evaluate((sel) => {
-      const el = document.querySelector(sel);
-      el.scrollIntoView({ block: 'start' });
-      const r = el.getBoundingClientRect();
-      return { x: Math.max(0, r.left), y: Math.max(0, r.top), width: r.width, height: Math.min(r.height, window.innerHeight - Math.max(0, r.top)) };
-    }, sel);
     await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(r))));
-    await page.screenshot({ path: path.join(SHOTS, `cvd-${stem}-${name || 'normal'}.png`), clip });
+    await page.elementScreenshot(sel, path.join(SHOTS, `cvd-${stem}-${name || 'normal'}.png`));
   }
   await simulate(null);
 }

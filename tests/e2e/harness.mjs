@@ -192,6 +192,11 @@ class Page {
     return r.ok;
   }
 
+  /** Runs a script's source in the page as it is (a library such as axe-core). */
+  async injectScript(source) {
+    await this.d.executeScript(`${source}\n;return true;`);
+  }
+
   /** Polls `fn(arg)` in the page until it is truthy; returns that value. */
   async waitForFunction(fn, arg, { timeout = 30000, what } = {}) {
     const end = Date.now() + timeout;

@@ -5,8 +5,8 @@
 #   webkit    WebKitGTK's MiniBrowser + WebKitWebDriver (Debian webkit2gtk-driver), Safari's
 #             engine, under an X display (xvfb-run)
 # each running every case of app.test.mjs over W3C WebDriver (harness.mjs), checked against
-# the native CLI; then Playwright's Chromium-only extras (chromium-extras.test.mjs) and the
-# accessibility checks (a11y.test.mjs) if present.
+# the native CLI, and the accessibility checks (a11y.test.mjs: axe-core, 390 px, colour-vision
+# screenshots); then Playwright's Chromium-only extras (chromium-extras.test.mjs).
 #   E2E_ENGINES="chromium webkit" tests/e2e/run.sh      a subset of engines
 # Installs the npm packages and builds what is missing (dist/, the CLI). Screenshots and
 # measured figures land in tests/e2e/screenshots/<engine>/ (gitignored).
@@ -38,36 +38,37 @@ ENGINES="${E2E_ENGINES:-chromium firefox webkit}"
 SUMMARY=""
 STATUS=0
 for engine in $ENGINES; do
-    echo "[e2e] === $engine: app.test.mjs" >&2
-    start=$(date +%s)
     launcher=()
     # MiniBrowser is a GTK window: it needs an X display even for automation.
     if [ "$engine" = webkit ] && [ -z "${DISPLAY:-}" ]; then launcher=(xvfb-run -a -s "-screen 0 1600x1200x24"); fi
-    log="$(mktemp)"
-    set +e
-    E2E_ENGINE="$engine" "${launcher[@]}" node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 app.test.mjs 2>&1 | tee "$log"
-    rc=${PIPESTATUS[0]}
-    set -e
-    tests=$(grep -aoE '^ℹ tests [0-9]+' "$log" | awk '{print $3}' | tail -1)
-    pass=$(grep -aoE '^ℹ pass [0-9]+' "$log" | awk '{print $3}' | tail -1)
-    rm -f "$log"
-    SUMMARY+="$(printf '%-9s %3s cases, %3s passed, %4ds' "$engine" "${tests:-?}" "${pass:-?}" "$(( $(date +%s) - start ))")"$'\n'
-    [ "$rc" -eq 0 ] || STATUS=1
+    for suite in app.test.mjs a11y.test.mjs; do
+        echo "[e2e] === $engine: $suite" >&2
+        start=$(date +%s)
+        log="$(mktemp)"
+        set +e
+        E2E_ENGINE="$engine" "${launcher[@]}" node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 "$suite" 2>&1 | tee "$log"
+        rc=${PIPESTATUS[0]}
+        set -e
+        tests=$(grep -aoE '^ℹ tests [0-9]+' "$log" | awk '{print $3}' | tail -1)
+        pass=$(grep -aoE '^ℹ pass [0-9]+' "$log" | awk '{print $3}' | tail -1)
+        rm -f "$log"
+        SUMMARY+="$(printf '%-14s %-9s %3s cases, %3s passed, %4ds' "$suite" "$engine" "${tests:-?}" "${pass:-?}" "$(( $(date +%s) - start ))")"$'\n'
+        [ "$rc" -eq 0 ] || STATUS=1
+    done
 done
 
 if [[ " $ENGINES " == *" chromium "* ]]; then
-    for extra in chromium-extras.test.mjs a11y.test.mjs; do
-        [ -f "$extra" ] || continue
-        echo "[e2e] === chromium (Playwright): $extra" >&2
-        node --test --test-concurrency=1 --test-timeout=1800000 "$extra" || STATUS=1
-    done
+    echo "[e2e] === chromium (Playwright): chromium-extras.test.mjs" >&2
+    node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 chromium-extras.test.mjs || STATUS=1
 fi
 
 echo "[e2e] per engine:" >&2
 printf '%s' "$SUMMARY" >&2
 # The same cases in every engine: a count that differs means a case was skipped somewhere.
-if [ "$(printf '%s' "$SUMMARY" | awk '{print $2}' | sort -u | wc -l)" -gt 1 ]; then
-    echo "[e2e] the engines ran different numbers of cases" >&2
-    STATUS=1
-fi
+for suite in app.test.mjs a11y.test.mjs; do
+    if [ "$(printf '%s' "$SUMMARY" | awk -v s="$suite" '$1 == s {print $3}' | sort -u | wc -l)" -gt 1 ]; then
+        echo "[e2e] $suite: the engines ran different numbers of cases" >&2
+        STATUS=1
+    fi
+done
 exit "$STATUS"
