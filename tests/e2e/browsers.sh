@@ -10,5 +10,5 @@ export PATH="$HOME/.cargo/bin:$PATH"
 [ -x target/release/siftlab ] || cargo build --release --bin siftlab
 cd "$HERE"
 launcher=()
-if [ -z "${DISPLAY:-}" ]; then launcher=(xvfb-run -a -s "-screen 0 1600x1200x24"); fi
+if [ -z "${DISPLAY:-}" ]; then launcher=(xvfb-run -a -s "-screen 0 1600x6200x24"); fi
 exec "${launcher[@]}" node browsers.mjs "$@"

@@ -333,10 +333,16 @@ class Page {
   async screenshot(file, { fullPage = false } = {}) {
     let restore;
     if (fullPage) {
-      const [w, h, sh] = await this.d.executeScript('return [innerWidth, innerHeight, document.documentElement.scrollHeight]');
+      // A taller viewport shows the whole page. A window cannot outgrow its screen (WebKit
+      // under Xvfb refuses the size): then the visible part is what is saved.
+      const [w, h, sh, screenH] = await this.d.executeScript('return [innerWidth, innerHeight, document.documentElement.scrollHeight, screen.height]');
       if (sh > h) {
         restore = { width: w, height: h };
-        await this.setViewportSize({ width: w, height: Math.min(sh, 6000) });
+        try {
+          await this.setViewportSize({ width: w, height: Math.min(sh, 6000, Math.max(h, screenH - 100)) });
+        } catch {
+          await this.setViewportSize(restore);
+        }
       }
     }
     fs.writeFileSync(file, Buffer.from(await this.d.takeScreenshot(), 'base64'));

@@ -40,7 +40,7 @@ STATUS=0
 for engine in $ENGINES; do
     launcher=()
     # MiniBrowser is a GTK window: it needs an X display even for automation.
-    if [ "$engine" = webkit ] && [ -z "${DISPLAY:-}" ]; then launcher=(xvfb-run -a -s "-screen 0 1600x1200x24"); fi
+    if [ "$engine" = webkit ] && [ -z "${DISPLAY:-}" ]; then launcher=(xvfb-run -a -s "-screen 0 1600x6200x24"); fi
     for suite in app.test.mjs a11y.test.mjs; do
         echo "[e2e] === $engine: $suite" >&2
         start=$(date +%s)
