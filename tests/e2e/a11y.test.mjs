@@ -11,12 +11,12 @@
 //
 // Run: E2E_ENGINE=firefox node --test --test-concurrency=1 a11y.test.mjs (dist/ built;
 // tests/e2e/run.sh runs it in every engine, WebKit under xvfb-run).
-import { test, before, after, beforeEach, afterEach } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { launch, serve, ROOT } from './harness.mjs';
+import { suite } from './harness.mjs';
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
 const ENGINE = process.env.E2E_ENGINE || 'chromium';
@@ -37,26 +37,13 @@ const report = {};
 // that does not pass yet, e.g. the one before a fix).
 const MEASURE_ONLY = process.env.A11Y_MEASURE_ONLY === '1';
 
-let browser;
-let server;
 let BASE;
 let page;
 
-before(async () => {
-  server = await serve(path.join(ROOT, 'dist'));
-  BASE = server.base;
-  browser = await launch(ENGINE);
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-  fs.writeFileSync(path.join(SHOTS, 'a11y.json'), JSON.stringify(report, null, 2));
-});
-beforeEach(async () => {
-  page = await browser.newPage({ width: 1400, height: 900 });
-});
-afterEach(async () => {
-  assert.deepEqual(await page.flushErrors(), [], 'console errors');
+suite(ENGINE, {
+  onStart: ({ base }) => { BASE = base; },
+  onPage: (p) => { page = p; },
+  onEnd: () => fs.writeFileSync(path.join(SHOTS, 'a11y.json'), JSON.stringify(report, null, 2)),
 });
 
 const tid = (id) => `[data-testid="${id}"]`;

@@ -4,13 +4,13 @@
 // engine; the reference is the native CLI (target/release/siftlab) on the same frames.
 // Slow engines get short inputs, never fewer cases: WebKit runs the SIMD128 worker, so
 // its odometry cases run fewer frames (E2E_VO_FRAME_ID).
-import { test, before, after, beforeEach, afterEach } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { execFileSync, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { launch, serve, ROOT } from './harness.mjs';
+import { suite, ROOT } from './harness.mjs';
 
 const ENGINE = process.env.E2E_ENGINE || 'chromium';
 // The odometry cases' FRAME_ID: the demo's whole straight run (0–99) where SIFT takes
@@ -62,31 +62,20 @@ function cliSift(id, lanes = LANES) {
   return siftCache.get(key);
 }
 
-let browser;
-let server;
 let BASE;
 let page;
 
-before(async () => {
-  assert.ok(fs.existsSync(CLI), `${CLI} missing: cargo build --release --bin siftlab`);
-  server = await serve(path.join(ROOT, 'dist'));
-  BASE = server.base;
-  browser = await launch(ENGINE);
-  metrics.browserVersion = browser.version;
-});
-after(async () => {
-  await browser?.close();
-  await server?.close();
-  fs.writeFileSync(path.join(SHOTS, 'metrics.json'), JSON.stringify(metrics, null, 2));
-});
-beforeEach(async () => {
-  page = await browser.newPage({ width: 1400, height: 900 });
-});
-afterEach(async () => {
-  // Every request stays on our origin (CSP violations are recorded as errors too), and
-  // nothing was logged as an error by the page or thrown by its workers.
-  assert.deepEqual(await page.offOrigin(), [], 'requests left the origin');
-  assert.deepEqual(await page.flushErrors(), [], 'console errors');
+// Every case ends by checking that all requests stayed on our origin (CSP violations are
+// recorded as errors too) and that nothing was logged as an error by the page or thrown
+// by its workers.
+suite(ENGINE, {
+  onStart: ({ base, browser }) => {
+    assert.ok(fs.existsSync(CLI), `${CLI} missing: cargo build --release --bin siftlab`);
+    BASE = base;
+    metrics.browserVersion = browser.version;
+  },
+  onPage: (p) => { page = p; },
+  onEnd: () => fs.writeFileSync(path.join(SHOTS, 'metrics.json'), JSON.stringify(metrics, null, 2)),
 });
 
 const tid = (id) => `[data-testid="${id}"]`;

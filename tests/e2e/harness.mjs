@@ -10,6 +10,8 @@
 // folders under /__e2e/fs/ so that a folder can be handed to the page in engines whose
 // driver cannot upload a directory (WebKitWebDriver sends a directory as an empty file).
 import { Builder, Key } from 'selenium-webdriver';
+import assert from 'node:assert/strict';
+import { before, after, beforeEach, afterEach } from 'node:test';
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import http from 'node:http';
@@ -140,6 +142,36 @@ export async function launch(engine) {
 }
 
 export const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
+
+/**
+ * Registers a test file's hooks: dist/ served and one `engine` session for the file
+ * (`onStart({ base, browser })`), a fresh 1400×900 page for each case (`onPage(page)`),
+ * and after each case the checks every case shares: no resource fetched off our origin,
+ * no error recorded by the page or its workers. `onEnd` runs once, after the last case.
+ */
+export function suite(engine, { onStart = () => {}, onPage, onEnd = () => {} }) {
+  let server;
+  let browser;
+  let page;
+  before(async () => {
+    server = await serve(path.join(ROOT, 'dist'));
+    browser = await launch(engine);
+    await onStart({ base: server.base, browser });
+  });
+  after(async () => {
+    await browser?.close();
+    await server?.close();
+    await onEnd();
+  });
+  beforeEach(async () => {
+    page = await browser.newPage({ width: 1400, height: 900 });
+    onPage(page);
+  });
+  afterEach(async () => {
+    assert.deepEqual(await page.offOrigin(), [], 'requests left the origin');
+    assert.deepEqual(await page.flushErrors(), [], 'console errors');
+  });
+}
 
 class Browser {
   constructor(engine, driver, proc, version) {
