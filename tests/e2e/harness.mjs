@@ -382,8 +382,24 @@ class Page {
   }
   async elementScreenshot(sel, file) {
     const el = await this.element(sel);
+    // Drivers capture what is in the viewport: grow it (up to the screen) to hold the element.
+    const [w, h, eh, screenH] = await this.d.executeScript(
+      'return [innerWidth, innerHeight, Math.ceil(arguments[0].getBoundingClientRect().height), screen.height]', el);
+    let restore;
+    if (eh > h) {
+      restore = { width: w, height: h };
+      try {
+        await this.setViewportSize({ width: w, height: Math.min(eh + 20, 6000, Math.max(h, screenH - 100)) });
+      } catch {
+        await this.setViewportSize(restore);
+      }
+    }
     await this.d.executeScript('arguments[0].scrollIntoView({ block: "start" })', el);
-    fs.writeFileSync(file, Buffer.from(await el.takeScreenshot(), 'base64'));
+    // WebKitWebDriver's element screenshot takes the wrong region of a scrolled page (the
+    // page's top, part of it black): there the viewport, scrolled to the element, is saved.
+    const shot = this.browser.engine === 'webkit' ? await this.d.takeScreenshot() : await el.takeScreenshot();
+    fs.writeFileSync(file, Buffer.from(shot, 'base64'));
+    if (restore) await this.setViewportSize(restore);
   }
 
   /**
