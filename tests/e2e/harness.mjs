@@ -355,10 +355,24 @@ class Page {
     let target = { width, height };
     for (let i = 0; i < 3; i++) {
       await win.setRect(target);
-      const inner = await this.d.executeScript('return [innerWidth, innerHeight]');
+      // The page sees a resize a little after the driver answers (WebKitGTK under Xvfb
+      // especially): read the viewport once it has stopped changing.
+      let inner = await this.d.executeScript('return [innerWidth, innerHeight]');
+      for (let k = 0; k < 20; k++) {
+        await sleep(25);
+        const again = await this.d.executeScript('return [innerWidth, innerHeight]');
+        if (again[0] === inner[0] && again[1] === inner[1]) break;
+        inner = again;
+      }
       if (inner[0] === width && inner[1] === height) return;
+      // The window's frame is the difference between its rect and the viewport. A window
+      // that cannot get there (below an engine's minimum width, above the screen) stays
+      // where it got: callers read innerWidth.
       const rect = await win.getRect();
-      target = { width: rect.width + width - inner[0], height: rect.height + height - inner[1] };
+      const next = { width: rect.width + width - inner[0], height: rect.height + height - inner[1] };
+      const sane = next.width >= width && next.height >= height && next.width < width + 400 && next.height < height + 400;
+      if (!sane || (next.width === target.width && next.height === target.height)) return;
+      target = next;
     }
   }
 
