@@ -3,7 +3,7 @@
 
 use crate::msg::FromWorker;
 use crate::msg_inside::{AnatomyData, InsideReply, InsideRequest, LevelThumb, SweepData};
-use crate::worker::now_ms;
+use crate::platform::now_ms;
 use siftlab_core::matching::epipolar::fundamental;
 use siftlab_core::matching::sweep::sweep;
 use siftlab_core::sift::anatomy::{anatomy, subsample, Anatomy, Rejection};

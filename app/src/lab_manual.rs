@@ -4,7 +4,7 @@
 //! can be shown beside siftlab's whichever way the view got there (a click, a
 //! link, or typing the same settings).
 
-use crate::state::{parse_feature, parse_threshold};
+use crate::parse::{parse_feature, parse_threshold};
 use siftlab_core::manual::{ManualExample, EXAMPLES};
 use siftlab_core::matching::StrategyKind;
 

@@ -7,6 +7,7 @@
 //! only loads input, calls `siftlab_core` and draws what it returns.
 
 pub mod client;
+pub mod codec;
 pub mod components;
 pub mod exercise;
 pub mod frameset;
@@ -16,6 +17,8 @@ pub mod lab_manual;
 pub mod loading;
 pub mod msg;
 pub mod msg_inside;
+pub mod parse;
+pub mod platform;
 pub mod plot;
 pub mod pylit;
 pub mod seeinside;

@@ -4,8 +4,8 @@
 
 use crate::client::{self, FrameData};
 use crate::frameset::{first_pair, has_pair, missing_pair_message};
+use crate::platform::now_ms;
 use crate::state::{Job, Lab, Source, Which};
-use crate::worker::now_ms;
 use leptos::prelude::*;
 use std::cell::RefCell;
 use std::collections::BTreeMap;

@@ -2,7 +2,7 @@
 //! of one frame, and the whole-frame sweep of a pair. Like `msg.rs`, plain
 //! objects whose bulk travels as typed arrays, typed on both sides.
 
-use crate::msg::{get, set, set_image_job};
+use crate::codec::{get, set, set_image_job};
 use js_sys::{Array, Float32Array, Float64Array, Int32Array, Object, Uint32Array, Uint8Array};
 use siftlab_core::dataset::PoseRow;
 use siftlab_core::matching::sweep::{Curve, Sweep};

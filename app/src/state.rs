@@ -2,6 +2,7 @@
 //! core derives from them. Everything the user sees is a function of this.
 
 use crate::client::Frame;
+use crate::parse::{parse_feature, parse_strategy};
 use leptos::prelude::*;
 use siftlab_core::matching::StrategyKind;
 use siftlab_core::matching::{explain, Explanation, Strategy};
@@ -113,25 +114,6 @@ pub fn strategy_label(kind: StrategyKind) -> &'static str {
         StrategyKind::Nn => "nn — nearest neighbour",
         StrategyKind::Nndr => "nndr — nearest-neighbour distance ratio",
     }
-}
-
-/// Threshold text → the value `Strategy::parse` takes (empty → none).
-pub fn parse_threshold(text: &str) -> Result<Option<f64>, String> {
-    let t = text.trim();
-    if t.is_empty() {
-        return Ok(None);
-    }
-    t.parse::<f64>().map(Some).map_err(|_| format!("threshold {t:?} is not a number"))
-}
-
-/// A strategy from its kind and the threshold text, validated by the core.
-pub fn parse_strategy(kind: StrategyKind, threshold: &str) -> Result<Strategy, String> {
-    Strategy::parse(kind.name(), parse_threshold(threshold)?).map_err(|e| e.to_string())
-}
-
-pub fn parse_feature(text: &str) -> Result<usize, String> {
-    let t = text.trim();
-    t.parse::<usize>().map_err(|_| format!("feature id {t:?} is not a whole number ≥ 0"))
 }
 
 #[derive(Clone, Copy)]
@@ -253,12 +235,12 @@ pub fn analyse(
     threshold: &str,
     feature: &str,
 ) -> Result<Analysis, String> {
-    let t0 = crate::worker::now_ms();
+    let t0 = crate::platform::now_ms();
     let strategy = parse_strategy(algo, threshold)?;
     let feature = parse_feature(feature)?;
     let explanation = explain(&strategy, &prev.features, &cur.features, feature).map_err(|e| e.to_string())?;
     let tuple = explanation.info.to_string();
-    Ok(Analysis { explanation: Arc::new(explanation), strategy, feature, tuple, ms: crate::worker::now_ms() - t0 })
+    Ok(Analysis { explanation: Arc::new(explanation), strategy, feature, tuple, ms: crate::platform::now_ms() - t0 })
 }
 
 /// Index of the keypoint nearest to (x, y) in image coordinates (the first

@@ -2,21 +2,12 @@
 //! reporting each stage so the page can show progress while it waits.
 
 use crate::msg::{FromWorker, SiftResult, ToWorker};
+use crate::platform::now_ms;
 use siftlab_core::sift::{detect_and_compute, SiftParams};
 use siftlab_core::vo::sift_detector;
 use siftlab_core::GrayImage;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
-
-/// `performance.now()` of whatever global we run in (window or worker).
-pub fn now_ms() -> f64 {
-    let perf = js_sys::Reflect::get(&js_sys::global(), &"performance".into()).ok();
-    perf.and_then(|p| {
-        let now = js_sys::Reflect::get(&p, &"now".into()).ok()?;
-        now.dyn_ref::<js_sys::Function>()?.call0(&p).ok()?.as_f64()
-    })
-    .unwrap_or_else(js_sys::Date::now)
-}
 
 /// Handles one request, posting progress and the outcome through `post`.
 pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {

@@ -75,7 +75,7 @@ pub fn AnatomyView() -> impl IntoView {
         data.set(None);
         error.set(None);
         status.set("starting the anatomy worker".into());
-        let t0 = crate::worker::now_ms();
+        let t0 = crate::platform::now_ms();
         let f2 = frame.clone();
         let req = InsideRequest::Anatomy { id: 1, bytes: frame.bytes.as_ref().clone(), lanes: frame.lanes as u32 };
         let sent = crate::jobs::run(req, move |m| match m {
@@ -85,7 +85,7 @@ pub fn AnatomyView() -> impl IntoView {
                     "anatomy in {:.0} ms in the worker (plain SIFT of this frame: {:.0} ms; {:.0} ms with the transfer)",
                     d.ms,
                     f2.sift_ms,
-                    crate::worker::now_ms() - t0
+                    crate::platform::now_ms() - t0
                 ));
                 data.set(Some(Shown(Arc::new(*d), f2.clone())));
             }

@@ -2,8 +2,9 @@
 
 use crate::exercise::{question, Question};
 use crate::loading;
+use crate::parse::parse_strategy;
 use crate::selfcheck::{diagnose, Diagnosis};
-use crate::state::{parse_strategy, Lab};
+use crate::state::Lab;
 use leptos::prelude::*;
 use siftlab_core::matching::{explain, mistaken_answers, Strategy};
 

@@ -1,6 +1,7 @@
 //! Strategy, threshold (slider + box), feature id, keypoint toggle.
 
-use crate::state::{get_info_command, parse_threshold, strategy_label, threshold_hint, Lab, Source, Which};
+use crate::parse::parse_threshold;
+use crate::state::{get_info_command, strategy_label, threshold_hint, Lab, Source, Which};
 use leptos::prelude::*;
 use siftlab_core::matching::StrategyKind;
 

@@ -3,8 +3,8 @@
 use super::ManualExamples;
 use crate::frameset::describe_ids;
 use crate::loading::{self, frame_path};
+use crate::platform::now_ms;
 use crate::state::{Lab, Source, Which};
-use crate::worker::now_ms;
 use leptos::prelude::*;
 use wasm_bindgen::JsCast;
 

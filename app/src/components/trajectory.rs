@@ -102,7 +102,7 @@ pub fn TrajectoryView() -> impl IntoView {
                 }
             };
             frames.set_value(fr.clone());
-            started_ms.set_value(crate::worker::now_ms());
+            started_ms.set_value(crate::platform::now_ms());
             let on_event = move |m| match m {
                 FromWorker::VoStep { frame, position, truth, .. } => {
                     steps.update(|s| s.push((frame, position, truth)));
@@ -197,7 +197,7 @@ pub fn TrajectoryView() -> impl IntoView {
                     <span class="muted">{move || {
                         // The rate so far, updated with each step while the run lasts
                         // (then the run's own figure, with the error, replaces it).
-                        let elapsed = crate::worker::now_ms() - started_ms.get_value();
+                        let elapsed = crate::platform::now_ms() - started_ms.get_value();
                         vo_progress_text(steps.with(|s| s.len()), total.get(), running.get(), elapsed)
                     }}</span>
                 </div>

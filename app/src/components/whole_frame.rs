@@ -97,7 +97,7 @@ pub fn WholeFrameView() -> impl IntoView {
                     None
                 }
             };
-            let t0 = crate::worker::now_ms();
+            let t0 = crate::platform::now_ms();
             let poses = poses.map(Box::new);
             let req = InsideRequest::WholeFrame { id: 2, prev: p.features.clone(), cur: c.features.clone(), poses, px };
             let (p2, c2) = (p.clone(), c.clone());
@@ -107,7 +107,7 @@ pub fn WholeFrameView() -> impl IntoView {
                     status.set(format!(
                         "sweep in {:.0} ms in the worker ({:.0} ms with the transfer)",
                         data.ms,
-                        crate::worker::now_ms() - t0
+                        crate::platform::now_ms() - t0
                     ));
                     swept.set(Some(Swept(Arc::new(*data), p2.clone(), c2.clone())));
                 }

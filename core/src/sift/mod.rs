@@ -34,6 +34,7 @@ pub(crate) mod initial;
 pub(crate) mod keypoint;
 pub(crate) mod lanes;
 pub(crate) mod num;
+pub(crate) mod observer;
 pub(crate) mod order;
 pub(crate) mod orientation;
 

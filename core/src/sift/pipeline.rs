@@ -2,9 +2,9 @@
 //! OpenCV's order (docs/fidelity.md §SIFT-2 to §SIFT-11). No stage calls a
 //! later one; the driver wires each stage's output into the next.
 
-use super::anatomy::Observer;
 use super::image::Plane;
 use super::keypoint::{Features, KeyPoint};
+use super::observer::Observer;
 use super::params::SiftParams;
 use super::{descriptor, extrema, initial, order, orientation, pyramid};
 use crate::image::GrayImage;

@@ -8,9 +8,9 @@
 //! live beside it: the 26-neighbour test once for every width in `vector.rs`,
 //! the DoG rows with AVX2 in `x86.rs`.
 
-use super::anatomy::Observer;
 use super::image::Plane;
 use super::keypoint::Refined;
+use super::observer::Observer;
 use super::params::SiftParams;
 
 mod refine;

@@ -7,7 +7,7 @@ use super::super::keypoint::{KeyPoint, Refined};
 use super::super::num::{fma, pow2f, rne, rne64};
 use super::super::params::SiftParams;
 use super::IMG_BORDER;
-use crate::sift::anatomy::Rejection;
+use crate::sift::observer::Rejection;
 
 // §SIFT-1: at most five refinement steps; the image and derivative scales.
 const MAX_INTERP_STEPS: usize = 5;
