@@ -376,44 +376,42 @@ class Page {
     }
   }
 
-  async screenshot(file, { fullPage = false } = {}) {
-    let restore;
-    if (fullPage) {
-      // A taller viewport shows the whole page. A window cannot outgrow its screen (WebKit
-      // under Xvfb refuses the size): then the visible part is what is saved.
-      const [w, h, sh, screenH] = await this.d.executeScript('return [innerWidth, innerHeight, document.documentElement.scrollHeight, screen.height]');
-      if (sh > h) {
-        restore = { width: w, height: h };
-        try {
-          await this.setViewportSize({ width: w, height: Math.min(sh, 6000, Math.max(h, screenH - 100)) });
-        } catch {
-          await this.setViewportSize(restore);
-        }
-      }
+  /**
+   * Runs `fn` with the viewport at least `height` tall: drivers capture only what is in
+   * the viewport. A window cannot outgrow its screen (WebKitGTK under Xvfb refuses the
+   * size), so the height stops there, and then what is visible is captured.
+   */
+  async withHeight(height, fn) {
+    const [w, h, screenH] = await this.d.executeScript('return [innerWidth, innerHeight, screen.height]');
+    if (height <= h) return fn();
+    const restore = { width: w, height: h };
+    try {
+      await this.setViewportSize({ width: w, height: Math.min(height, 6000, Math.max(h, screenH - 100)) });
+    } catch {
+      await this.setViewportSize(restore);
     }
-    fs.writeFileSync(file, Buffer.from(await this.d.takeScreenshot(), 'base64'));
-    if (restore) await this.setViewportSize(restore);
+    try {
+      return await fn();
+    } finally {
+      await this.setViewportSize(restore);
+    }
+  }
+
+  async screenshot(file, { fullPage = false } = {}) {
+    const height = fullPage ? await this.d.executeScript('return document.documentElement.scrollHeight') : 0;
+    const shot = await this.withHeight(height, () => this.d.takeScreenshot());
+    fs.writeFileSync(file, Buffer.from(shot, 'base64'));
   }
   async elementScreenshot(sel, file) {
     const el = await this.element(sel);
-    // Drivers capture what is in the viewport: grow it (up to the screen) to hold the element.
-    const [w, h, eh, screenH] = await this.d.executeScript(
-      'return [innerWidth, innerHeight, Math.ceil(arguments[0].getBoundingClientRect().height), screen.height]', el);
-    let restore;
-    if (eh > h) {
-      restore = { width: w, height: h };
-      try {
-        await this.setViewportSize({ width: w, height: Math.min(eh + 20, 6000, Math.max(h, screenH - 100)) });
-      } catch {
-        await this.setViewportSize(restore);
-      }
-    }
-    await this.d.executeScript('arguments[0].scrollIntoView({ block: "start" })', el);
-    // WebKitWebDriver's element screenshot takes the wrong region of a scrolled page (the
-    // page's top, part of it black): there the viewport, scrolled to the element, is saved.
-    const shot = this.browser.engine === 'webkit' ? await this.d.takeScreenshot() : await el.takeScreenshot();
+    const height = await this.d.executeScript('return Math.ceil(arguments[0].getBoundingClientRect().height) + 20', el);
+    const shot = await this.withHeight(height, async () => {
+      await this.d.executeScript('arguments[0].scrollIntoView({ block: "start" })', el);
+      // WebKitWebDriver's element screenshot takes the wrong region of a scrolled page
+      // (the page's top, part of it black): there the viewport, scrolled to the element.
+      return this.browser.engine === 'webkit' ? this.d.takeScreenshot() : el.takeScreenshot();
+    });
     fs.writeFileSync(file, Buffer.from(shot, 'base64'));
-    if (restore) await this.setViewportSize(restore);
   }
 
   /**
