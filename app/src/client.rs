@@ -1,6 +1,8 @@
-//! The page side of the SIFT workers: a small pool (one worker per frame slot,
-//! since the two frames of a pair are independent), a request queue for the
-//! start-up window, and a cache of finished frames keyed by the file's content.
+//! The page side of the SIFT workers: a pool sized from the machine's cores
+//! ([`worker_count`]), a request queue for the start-up window, and a cache of
+//! finished frames keyed by the file's content and the OpenCV build, bounded
+//! to [`CACHE_BUDGET`] bytes. The pair's frames and every odometry run's
+//! frames ([`features`]) go through it, so a frame's SIFT is computed once.
 
 use crate::msg::{FromWorker, SiftResult, ToWorker};
 use std::cell::RefCell;
@@ -130,6 +132,23 @@ struct Job {
     waiters: Vec<Waiter>,
 }
 
+/// A finished frame in the cache, with the tick of its last use.
+struct Cached {
+    result: SiftResult,
+    used: u64,
+}
+
+/// What a cached result holds in memory: the gray image (absent for an
+/// odometry frame), 20 bytes of keypoint and 128 of descriptor per feature.
+fn result_bytes(r: &SiftResult) -> usize {
+    r.gray.len() + r.features.keypoints.len() * (std::mem::size_of::<siftlab_core::sift::KeyPoint>() + 128)
+}
+
+/// The cache's bound: 128 MB, about 560 odometry frames of KITTI (0.23 MB
+/// each: 1500 keypoints and descriptors) or 180 frames of the pair view
+/// (0.7 MB with the gray image). The least recently used go first.
+pub const CACHE_BUDGET: usize = 128 << 20;
+
 /// A SIFT worker of the pool and the number of jobs it has.
 struct Slot {
     handle: WorkerHandle,
@@ -144,7 +163,42 @@ struct Pool {
     next_id: u32,
     jobs: HashMap<u32, Job>,
     in_flight: HashMap<u64, u32>,
-    cache: HashMap<u64, SiftResult>,
+    cache: HashMap<u64, Cached>,
+    cache_bytes: usize,
+    tick: u64,
+    /// The largest wasm memory a SIFT worker reported.
+    peak_memory: u32,
+}
+
+impl Pool {
+    fn cache_get(&mut self, key: u64) -> Option<SiftResult> {
+        self.tick += 1;
+        let tick = self.tick;
+        self.cache.get_mut(&key).map(|c| {
+            c.used = tick;
+            c.result.clone()
+        })
+    }
+
+    /// Stores `r` (a result with the gray image replaces one without), then
+    /// drops the least recently used until the cache is within budget.
+    fn cache_put(&mut self, key: u64, r: SiftResult) {
+        self.tick += 1;
+        if let Some(old) = self.cache.get(&key) {
+            if !old.result.gray.is_empty() || r.gray.is_empty() {
+                return;
+            }
+            self.cache_bytes -= result_bytes(&old.result);
+        }
+        self.cache_bytes += result_bytes(&r);
+        self.cache.insert(key, Cached { result: r, used: self.tick });
+        while self.cache_bytes > CACHE_BUDGET && self.cache.len() > 1 {
+            let Some((&old, _)) = self.cache.iter().min_by_key(|(_, c)| c.used) else { break };
+            if let Some(c) = self.cache.remove(&old) {
+                self.cache_bytes -= result_bytes(&c.result);
+            }
+        }
+    }
 }
 
 thread_local! {
@@ -154,8 +208,28 @@ thread_local! {
     });
 }
 
-/// Number of workers: one per frame of a pair.
-const WORKERS: usize = 2;
+thread_local! {
+    /// The `workers=N` URL parameter, if given.
+    static WORKERS_OVERRIDE: std::cell::Cell<Option<usize>> = const { std::cell::Cell::new(None) };
+}
+
+/// Sets the number of SIFT workers (`workers=N`); call before any SIFT runs.
+pub fn set_workers(n: Option<usize>) {
+    WORKERS_OVERRIDE.with(|w| w.set(n));
+}
+
+/// The number of SIFT workers: `workers=N` if given, else from the browser's
+/// core count (`parse::default_workers`: cores − 1, 2 to 8).
+pub fn worker_count() -> usize {
+    WORKERS_OVERRIDE
+        .with(|w| w.get())
+        .unwrap_or_else(|| crate::parse::default_workers(crate::platform::hardware_concurrency()))
+}
+
+/// The largest wasm memory (bytes) a SIFT worker of this page has reported.
+pub fn worker_memory_peak() -> u32 {
+    POOL.with(|p| p.borrow().peak_memory)
+}
 
 fn spawn(index: usize, script: &str) -> Result<Slot, String> {
     let handle = WorkerHandle::start(script, move |m| on_worker_message(index, m), move || on_worker_crash(index))?;
@@ -172,10 +246,9 @@ fn on_worker_message(index: usize, m: FromWorker) {
         FromWorker::Progress { id, stage } => with_progress(id, &stage),
         FromWorker::Done { id, result } => finish(id, Ok(result)),
         FromWorker::Failed { id, message } => finish(id, Err(message)),
-        // Odometry runs have their own workers (see `run_vo`).
+        // Odometry runs have their own tracking workers (`vo_run`).
         FromWorker::VoStep { .. }
         | FromWorker::VoDone { .. }
-        | FromWorker::Detected { .. }
         | FromWorker::VoMetrics { .. }
         | FromWorker::Inside(_) => {}
     }
@@ -207,7 +280,8 @@ fn finish(id: u32, r: Result<SiftResult, String>) {
             s.load = s.load.saturating_sub(1);
         }
         if let Ok(res) = &r {
-            p.cache.insert(job.key, res.clone());
+            p.peak_memory = p.peak_memory.max(res.memory);
+            p.cache_put(job.key, res.clone());
         }
         Some(job)
     });
@@ -241,18 +315,29 @@ pub(crate) fn worker_script() -> String {
     POOL.with(|p| p.borrow().script.clone())
 }
 
-/// A frame already analysed with these exact bytes, if any.
+/// A frame already analysed with these exact bytes, if any (with its gray
+/// image, decoded here if the cache kept only the features).
 pub fn cached(bytes: &[u8], lanes: usize) -> Option<SiftResult> {
     let key = content_key(bytes, lanes);
-    POOL.with(|p| p.borrow().cache.get(&key).cloned())
+    let hit = POOL.with(|p| p.borrow_mut().cache_get(key))?;
+    with_gray(hit, bytes).ok()
 }
 
 /// Stores a result computed elsewhere (tests, or a frame analysed in-process).
 pub fn insert_cache(bytes: &[u8], lanes: usize, r: SiftResult) {
     let key = content_key(bytes, lanes);
-    POOL.with(|p| {
-        p.borrow_mut().cache.insert(key, r);
-    });
+    POOL.with(|p| p.borrow_mut().cache_put(key, r));
+}
+
+/// `r` with its gray image: an odometry frame's result is cached without it,
+/// and decoding the file again here (milliseconds) is cheaper than keeping
+/// 0.47 MB per KITTI frame.
+fn with_gray(mut r: SiftResult, bytes: &[u8]) -> Result<SiftResult, String> {
+    if r.gray.is_empty() && r.width * r.height > 0 {
+        let img = siftlab_core::GrayImage::decode(bytes).map_err(|e| e.to_string())?;
+        r.gray = img.data().to_vec();
+    }
+    Ok(r)
 }
 
 /// Runs SIFT on `bytes` in a worker. `done` is called exactly once (immediately
@@ -263,12 +348,25 @@ pub fn sift(
     progress: impl Fn(String) + 'static,
     done: impl FnOnce(Result<SiftResult, String>) + 'static,
 ) {
+    let file = Arc::new(bytes.clone());
+    let done = move |r: Result<SiftResult, String>| done(r.and_then(|r| with_gray(r, &file)));
+    request(bytes, lanes, true, Box::new(progress), Box::new(done));
+}
+
+/// SIFT's keypoints and descriptors of `bytes` with the host's OpenCV build
+/// (`SiftParams::for_host`, what the odometry uses), through the same pool
+/// and cache as [`sift`], without the gray image.
+pub fn features(bytes: Vec<u8>, done: impl FnOnce(Result<SiftResult, String>) + 'static) {
+    request(bytes, siftlab_core::sift::host_opencv_lanes(), false, Box::new(|_| {}), Box::new(done));
+}
+
+fn request(bytes: Vec<u8>, lanes: usize, gray: bool, progress: Progress, done: Done) {
     let key = content_key(&bytes, lanes);
-    if let Some(hit) = POOL.with(|p| p.borrow().cache.get(&key).cloned()) {
+    if let Some(hit) = POOL.with(|p| p.borrow_mut().cache_get(key)) {
         done(Ok(hit));
         return;
     }
-    let waiter = Waiter { progress: Box::new(progress), done: Box::new(done) };
+    let waiter = Waiter { progress, done };
     let failed: Result<(), (String, Waiter)> = POOL.with(|p| {
         let mut p = p.borrow_mut();
         if let Some(id) = p.in_flight.get(&key).copied() {
@@ -277,8 +375,9 @@ pub fn sift(
                 return Ok(());
             }
         }
-        p.slots.resize_with(WORKERS, || None);
-        for i in 0..WORKERS {
+        let workers = worker_count();
+        p.slots.resize_with(workers, || None);
+        for i in 0..workers {
             if p.slots[i].is_none() {
                 let script = p.script.clone();
                 match spawn(i, &script) {
@@ -288,251 +387,23 @@ pub fn sift(
             }
         }
         let load = |s: &Option<Slot>| s.as_ref().map(|s| s.load).unwrap_or(usize::MAX);
-        let slot = (0..WORKERS).min_by_key(|&i| load(&p.slots[i])).unwrap_or(0);
+        let slot = (0..workers).min_by_key(|&i| load(&p.slots[i])).unwrap_or(0);
         p.next_id = p.next_id.wrapping_add(1);
         let id = p.next_id;
         p.jobs.insert(id, Job { key, slot, waiters: vec![waiter] });
         p.in_flight.insert(key, id);
         if let Some(s) = p.slots[slot].as_mut() {
             s.load += 1;
-            s.handle.send(ToWorker::Sift { id, bytes, lanes: lanes as u32 });
+            let lanes = lanes as u32;
+            s.handle.send(if gray {
+                ToWorker::Sift { id, bytes, lanes }
+            } else {
+                ToWorker::Features { id, bytes, lanes }
+            });
         }
         Ok(())
     });
     if let Err((e, w)) = failed {
         (w.done)(Err(e));
     }
-}
-
-/// A visual-odometry run: a tracking worker that runs the lab's loop a frame
-/// at a time, and two detection helpers that find each frame's keypoints
-/// ahead of it, two frames at once (detection needs only the image, and is
-/// nine tenths of a frame's work in wasm). The page hands frames to the
-/// helpers as they free up and each detected frame to the tracker in order,
-/// so the results are those of the one-worker loop (and of the CLI), only
-/// sooner. Dropping it (a new run, or [`stop_vo`]) terminates the workers.
-struct VoRun {
-    tracker: WorkerHandle,
-    helpers: Vec<Helper>,
-    frames: Vec<Vec<u8>>,
-    /// Per frame: `None` until detected; `Some(None)` for frame 1, which never re-detects.
-    detected: Vec<Option<Option<Vec<[f32; 2]>>>>,
-    next_detect: usize,
-    next_track: usize,
-    tracking: bool,
-    over: bool,
-    on_event: std::rc::Rc<dyn Fn(FromWorker)>,
-}
-
-/// A detection helper of an odometry run.
-struct Helper {
-    handle: WorkerHandle,
-    /// The frame it is detecting.
-    busy: Option<usize>,
-    /// A helper that crashed gets no more frames.
-    dead: bool,
-}
-
-thread_local! {
-    static VO_RUN: RefCell<Option<VoRun>> = const { RefCell::new(None) };
-}
-
-/// Which worker of the run a message came from.
-#[derive(Clone, Copy)]
-enum Role {
-    Tracker,
-    Helper(usize),
-}
-
-const VO_ID: u32 = 1;
-const VO_HELPERS: usize = 2;
-
-/// Starts the lab's odometry loop on `frames`; `on_event` gets every
-/// `VoStep`, then `VoDone` or `Failed`. A new run replaces the previous one.
-pub fn run_vo(frames: Vec<Vec<u8>>, poses: String, on_event: impl Fn(FromWorker) + 'static) -> Result<(), String> {
-    let start = ToWorker::VoStart { id: VO_ID, total: frames.len() as u32, poses };
-    start_vo(frames, start, VO_HELPERS, on_event)
-}
-
-/// [`run_vo`] with the student's matcher instead of LK (`vo::matched`): the
-/// tracking worker runs SIFT on every frame itself, so no helpers.
-pub fn run_vo_matched(
-    frames: Vec<Vec<u8>>,
-    poses: String,
-    strategy: siftlab_core::matching::Strategy,
-    on_event: impl Fn(FromWorker) + 'static,
-) -> Result<(), String> {
-    let start = ToWorker::VoMatchedStart {
-        id: VO_ID,
-        total: frames.len() as u32,
-        poses,
-        algo: strategy.name().into(),
-        threshold: strategy.threshold(),
-    };
-    start_vo(frames, start, 0, on_event)
-}
-
-fn start_vo(
-    frames: Vec<Vec<u8>>,
-    start_msg: ToWorker,
-    helpers: usize,
-    on_event: impl Fn(FromWorker) + 'static,
-) -> Result<(), String> {
-    stop_vo();
-    let script = POOL.with(|p| p.borrow().script.clone());
-    let start = |role: Role| WorkerHandle::start(&script, move |m| on_vo_message(role, m), move || on_vo_crash(role));
-    let mut tracker = start(Role::Tracker)?;
-    let helpers = (0..helpers)
-        .map(|i| start(Role::Helper(i)).map(|handle| Helper { handle, busy: None, dead: false }))
-        .collect::<Result<Vec<_>, _>>()?;
-    let matched = matches!(start_msg, ToWorker::VoMatchedStart { .. });
-    tracker.send(start_msg);
-    let mut detected = vec![None; frames.len()];
-    for (i, d) in detected.iter_mut().enumerate() {
-        // Frame 1 never re-detects; a matched run detects in the tracker.
-        if i == 1 || matched {
-            *d = Some(None);
-        }
-    }
-    let mut run = VoRun {
-        tracker,
-        helpers,
-        frames,
-        detected,
-        next_detect: 0,
-        next_track: 0,
-        tracking: false,
-        over: false,
-        on_event: std::rc::Rc::new(on_event),
-    };
-    run.feed();
-    VO_RUN.with(|r| *r.borrow_mut() = Some(run));
-    Ok(())
-}
-
-impl VoRun {
-    /// Gives every idle helper the next frame to detect, and the tracker the
-    /// next frame once its keypoints are in.
-    fn feed(&mut self) {
-        if self.over {
-            return;
-        }
-        for h in 0..self.helpers.len() {
-            while self.next_detect < self.frames.len() && self.detected[self.next_detect].is_some() {
-                self.next_detect += 1;
-            }
-            let helper = &self.helpers[h];
-            if helper.busy.is_some() || helper.dead || self.next_detect >= self.frames.len() {
-                continue;
-            }
-            let i = self.next_detect;
-            self.next_detect += 1;
-            self.helpers[h].busy = Some(i);
-            self.helpers[h].handle.send(ToWorker::Detect { frame: i as u32, bytes: self.frames[i].clone() });
-        }
-        if self.tracking || self.next_track >= self.frames.len() {
-            return;
-        }
-        let i = self.next_track;
-        let Some(points) = self.detected[i].take() else { return };
-        self.next_track += 1;
-        self.tracking = true;
-        self.tracker.send(ToWorker::VoFrame { id: VO_ID, frame: i as u32, bytes: self.frames[i].clone(), points });
-    }
-
-    /// A helper that could not detect its frame (a broken file, or the
-    /// helper crashed): the tracker detects that frame itself, so a broken
-    /// frame fails there, in frame order after the steps before it, with
-    /// the one-worker loop's message.
-    fn detect_in_tracker(&mut self, h: usize) {
-        if let Some(i) = self.helpers[h].busy.take() {
-            self.detected[i] = Some(None);
-        }
-    }
-}
-
-/// A worker of the run crashed: a helper's frame goes to the tracker and
-/// the run goes on without it; the tracker's crash ends the run.
-fn on_vo_crash(role: Role) {
-    let forward = VO_RUN.with(|r| {
-        let mut r = r.borrow_mut();
-        let run = r.as_mut()?;
-        if run.over {
-            return None;
-        }
-        match role {
-            Role::Helper(h) => {
-                run.helpers[h].dead = true;
-                run.detect_in_tracker(h);
-                run.feed();
-                None
-            }
-            Role::Tracker => {
-                run.over = true;
-                let message = "the odometry worker failed (it could not start, or ran out of memory)";
-                Some((run.on_event.clone(), FromWorker::Failed { id: VO_ID, message: message.into() }))
-            }
-        }
-    });
-    if let Some((on_event, m)) = forward {
-        on_event(m);
-    }
-}
-
-fn on_vo_message(role: Role, m: FromWorker) {
-    // Update the run, then call the page's handler outside the borrow (it may
-    // start a new run or stop this one).
-    let forward = VO_RUN.with(|r| {
-        let mut r = r.borrow_mut();
-        let run = r.as_mut()?;
-        if let FromWorker::Ready = m {
-            match role {
-                Role::Tracker => run.tracker.set_ready(),
-                Role::Helper(h) => run.helpers[h].handle.set_ready(),
-            }
-            return None;
-        }
-        if run.over {
-            return None;
-        }
-        let forward = match (&role, &m) {
-            (Role::Helper(h), FromWorker::Detected { frame, points }) => {
-                run.helpers[*h].busy = None;
-                if let Some(d) = run.detected.get_mut(*frame as usize) {
-                    *d = Some(Some(points.clone()));
-                }
-                None
-            }
-            (Role::Helper(h), FromWorker::Failed { .. }) => {
-                run.detect_in_tracker(*h);
-                None
-            }
-            (Role::Tracker, FromWorker::VoStep { .. }) => {
-                run.tracking = false;
-                Some(m)
-            }
-            (Role::Tracker, FromWorker::VoMetrics { .. }) => Some(m),
-            (_, FromWorker::VoDone { .. }) => {
-                run.over = true;
-                Some(m)
-            }
-            (_, FromWorker::Failed { message, .. }) => {
-                run.over = true;
-                Some(FromWorker::Failed { id: VO_ID, message: message.clone() })
-            }
-            _ => None,
-        };
-        run.feed();
-        forward.map(|m| (run.on_event.clone(), m))
-    });
-    if let Some((on_event, m)) = forward {
-        on_event(m);
-    }
-}
-
-/// Stops a running odometry (its workers are terminated).
-pub fn stop_vo() {
-    // Take it out first: dropping terminates the workers, outside the borrow.
-    let old = VO_RUN.with(|r| r.borrow_mut().take());
-    drop(old);
 }

@@ -25,6 +25,7 @@ pub mod seeinside;
 pub mod selfcheck;
 pub mod state;
 pub mod urlstate;
+pub mod vo_run;
 pub mod vo_view;
 pub mod worker;
 

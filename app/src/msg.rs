@@ -18,19 +18,23 @@ pub enum ToWorker {
     /// Decode `bytes` (PNG/JPEG) as the core does and run SIFT with the lab's
     /// parameters; `lanes` is OpenCV's SIMD width to reproduce (8 = AVX2, 16 = AVX-512).
     Sift { id: u32, bytes: Vec<u8>, lanes: u32 },
-    /// The lab's keypoint detection alone (`SIFT.detect` positions, in order) on
-    /// frame `frame` of an odometry run: detection helpers run it ahead of the
-    /// tracking worker, two frames at a time.
-    Detect { frame: u32, bytes: Vec<u8> },
+    /// [`ToWorker::Sift`] without the gray image in the reply (its `Done` has
+    /// an empty `gray`): what an odometry run asks for each frame, so the
+    /// page's cache holds 0.23 MB per KITTI frame instead of 0.7 MB.
+    Features { id: u32, bytes: Vec<u8>, lanes: u32 },
     /// Starts an odometry run of `total` frames fed one [`ToWorker::VoFrame`] at a time.
     VoStart { id: u32, total: u32, poses: String },
-    /// The run's next frame, with its keypoints if a helper already detected
-    /// them (`None` for frame 1, which never re-detects).
+    /// The run's next frame, with its keypoints if the page's SIFT workers
+    /// computed them (`None`: the tracker detects itself where the loop
+    /// re-detects; frame 1 never does).
     VoFrame { id: u32, frame: u32, bytes: Vec<u8>, points: Option<Vec<[f32; 2]>> },
     /// Starts a run of the loop driven by the student's matcher
-    /// (`vo::matched`) instead of LK; its frames come as `VoFrame`s without
-    /// points (the worker runs SIFT on each once).
+    /// (`vo::matched`) instead of LK; its frames come as `VoFeatures` (or as
+    /// `VoFrame`s, on which the worker runs SIFT itself).
     VoMatchedStart { id: u32, total: u32, poses: String, algo: String, threshold: Option<f64> },
+    /// A matcher-driven run's next frame as its SIFT features, computed once
+    /// by the page's SIFT workers and shared by every tracker of the page.
+    VoFeatures { id: u32, frame: u32, features: Features },
     /// SIFT's anatomy or the whole-frame sweep (`msg_inside`).
     Inside(crate::msg_inside::InsideRequest),
 }
@@ -46,6 +50,9 @@ pub struct SiftResult {
     pub sift_ms: f64,
     /// How the worker's build computes SIFT's multiply-adds (`fma_engine`).
     pub engine: String,
+    /// The worker's wasm memory (`memory.buffer.byteLength`) after the job:
+    /// linear memory never shrinks, so this is the worker's peak so far.
+    pub memory: u32,
 }
 
 /// Worker → page.
@@ -84,17 +91,14 @@ pub enum FromWorker {
         ate: f64,
         png: Vec<u8>,
         ms: f64,
+        /// The estimated poses in KITTI's format, as `--save-poses` writes them.
+        kitti: String,
     },
     /// Sent just before `VoDone`: the run's metrics
     /// (`TrajectoryMetrics::to_array`, KITTI figures NaN when undefined).
     VoMetrics {
         id: u32,
         metrics: [f64; 7],
-    },
-    /// The keypoint positions of a [`ToWorker::Detect`] frame.
-    Detected {
-        frame: u32,
-        points: Vec<[f32; 2]>,
     },
     /// The outcome of a [`ToWorker::Inside`] request.
     Inside(crate::msg_inside::InsideReply),
@@ -105,10 +109,12 @@ impl ToWorker {
         let o = Object::new();
         match self {
             ToWorker::Sift { id, bytes, lanes } => set_image_job(&o, "sift", *id, bytes, *lanes),
-            ToWorker::Detect { frame, bytes } => {
-                set(&o, "type", &"detect".into());
+            ToWorker::Features { id, bytes, lanes } => set_image_job(&o, "features", *id, bytes, *lanes),
+            ToWorker::VoFeatures { id, frame, features } => {
+                set(&o, "type", &"voFeatures".into());
+                set(&o, "id", &(*id).into());
                 set(&o, "frame", &(*frame).into());
-                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
+                set_features(&o, features);
             }
             ToWorker::VoStart { id, total, poses } => {
                 set(&o, "type", &"voStart".into());
@@ -144,7 +150,16 @@ impl ToWorker {
             "sift" => {
                 Ok(ToWorker::Sift { id: get_u32(v, "id")?, bytes: get_bytes(v, "bytes")?, lanes: get_u32(v, "lanes")? })
             }
-            "detect" => Ok(ToWorker::Detect { frame: get_u32(v, "frame")?, bytes: get_bytes(v, "bytes")? }),
+            "features" => Ok(ToWorker::Features {
+                id: get_u32(v, "id")?,
+                bytes: get_bytes(v, "bytes")?,
+                lanes: get_u32(v, "lanes")?,
+            }),
+            "voFeatures" => Ok(ToWorker::VoFeatures {
+                id: get_u32(v, "id")?,
+                frame: get_u32(v, "frame")?,
+                features: get_features(v)?,
+            }),
             "voStart" => Ok(ToWorker::VoStart {
                 id: get_u32(v, "id")?,
                 total: get_u32(v, "total")?,
@@ -197,8 +212,9 @@ impl FromWorker {
                 set(&o, "tracked", &(*tracked).into());
                 set(&o, "redetected", &(*redetected).into());
             }
-            FromWorker::VoDone { id, ate, png, ms } => {
+            FromWorker::VoDone { id, ate, png, ms, kitti } => {
                 set(&o, "type", &"voDone".into());
+                set(&o, "kitti", &kitti.as_str().into());
                 set(&o, "id", &(*id).into());
                 set(&o, "ate", &(*ate).into());
                 set(&o, "png", &Uint8Array::from(png.as_slice()).into());
@@ -209,31 +225,17 @@ impl FromWorker {
                 set(&o, "id", &(*id).into());
                 set(&o, "metrics", &js_sys::Float64Array::from(metrics.as_slice()).into());
             }
-            FromWorker::Detected { frame, points } => {
-                set(&o, "type", &"detected".into());
-                set(&o, "frame", &(*frame).into());
-                set(&o, "points", &points_js(points));
-            }
             FromWorker::Done { id, result } => {
                 set(&o, "type", &"done".into());
                 set(&o, "id", &(*id).into());
                 set(&o, "width", &(result.width as u32).into());
                 set(&o, "height", &(result.height as u32).into());
                 set(&o, "gray", &Uint8Array::from(result.gray.as_slice()).into());
-                let kps = &result.features.keypoints;
-                let mut f = Vec::with_capacity(kps.len() * KP_FLOATS);
-                let mut oct = Vec::with_capacity(kps.len());
-                for k in kps {
-                    f.extend_from_slice(&[k.x, k.y, k.size, k.angle, k.response]);
-                    oct.push(k.octave);
-                }
-                set(&o, "kp", &Float32Array::from(f.as_slice()).into());
-                set(&o, "octave", &Int32Array::from(oct.as_slice()).into());
-                let desc: Vec<u8> = result.features.descriptors.iter().flatten().copied().collect();
-                set(&o, "desc", &Uint8Array::from(desc.as_slice()).into());
+                set_features(&o, &result.features);
                 set(&o, "decodeMs", &result.decode_ms.into());
                 set(&o, "siftMs", &result.sift_ms.into());
                 set(&o, "engine", &result.engine.as_str().into());
+                set(&o, "memory", &result.memory.into());
             }
         }
         o.into()
@@ -261,6 +263,7 @@ impl FromWorker {
                 ate: get_f64(v, "ate")?,
                 png: get_bytes(v, "png")?,
                 ms: get_f64(v, "ms")?,
+                kitti: get_str(v, "kitti")?,
             }),
             "voMetrics" => {
                 let a = get(v, "metrics")?
@@ -271,26 +274,12 @@ impl FromWorker {
                     a.try_into().map_err(|a: Vec<f64>| format!("voMetrics has {} numbers, not 7", a.len()))?;
                 Ok(FromWorker::VoMetrics { id: get_u32(v, "id")?, metrics })
             }
-            "detected" => Ok(FromWorker::Detected {
-                frame: get_u32(v, "frame")?,
-                points: get_points(v, "points")?.ok_or("detected without points")?,
-            }),
             "done" => {
-                let kp = get(v, "kp")?
-                    .dyn_into::<Float32Array>()
-                    .map_err(|_| "message field kp is not a Float32Array".to_string())?
-                    .to_vec();
-                let octave = get(v, "octave")?
-                    .dyn_into::<Int32Array>()
-                    .map_err(|_| "message field octave is not an Int32Array".to_string())?
-                    .to_vec();
                 let parts = SiftParts {
                     width: get_u32(v, "width")?,
                     height: get_u32(v, "height")?,
                     gray: get_bytes(v, "gray")?,
-                    kp,
-                    octave,
-                    desc: get_bytes(v, "desc")?,
+                    ..get_feature_parts(v)?
                 };
                 Ok(FromWorker::Done {
                     id: get_u32(v, "id")?,
@@ -298,6 +287,7 @@ impl FromWorker {
                         decode_ms: get_f64(v, "decodeMs")?,
                         sift_ms: get_f64(v, "siftMs")?,
                         engine: get_str(v, "engine")?,
+                        memory: get_u32(v, "memory")?,
                         ..parts.check()?
                     },
                 })
@@ -305,6 +295,38 @@ impl FromWorker {
             other => Err(format!("unknown message type {other:?}")),
         }
     }
+}
+
+/// Writes `f` as the flat `kp`, `octave` and `desc` arrays of a message.
+fn set_features(o: &Object, f: &Features) {
+    let mut flat = Vec::with_capacity(f.keypoints.len() * KP_FLOATS);
+    let mut oct = Vec::with_capacity(f.keypoints.len());
+    for k in &f.keypoints {
+        flat.extend_from_slice(&[k.x, k.y, k.size, k.angle, k.response]);
+        oct.push(k.octave);
+    }
+    set(o, "kp", &Float32Array::from(flat.as_slice()).into());
+    set(o, "octave", &Int32Array::from(oct.as_slice()).into());
+    let desc: Vec<u8> = f.descriptors.iter().flatten().copied().collect();
+    set(o, "desc", &Uint8Array::from(desc.as_slice()).into());
+}
+
+/// The flat `kp`, `octave` and `desc` arrays of a message (no image).
+fn get_feature_parts(v: &JsValue) -> Result<SiftParts, String> {
+    let kp = get(v, "kp")?
+        .dyn_into::<Float32Array>()
+        .map_err(|_| "message field kp is not a Float32Array".to_string())?
+        .to_vec();
+    let octave = get(v, "octave")?
+        .dyn_into::<Int32Array>()
+        .map_err(|_| "message field octave is not an Int32Array".to_string())?
+        .to_vec();
+    Ok(SiftParts { kp, octave, desc: get_bytes(v, "desc")?, ..SiftParts::default() })
+}
+
+/// A message's features, with [`SiftParts::check`]'s size checks.
+fn get_features(v: &JsValue) -> Result<Features, String> {
+    Ok(get_feature_parts(v)?.check()?.features)
 }
 
 /// The bulk of a `done` message as it arrives: the gray image and the
@@ -323,11 +345,12 @@ pub struct SiftParts {
 
 impl SiftParts {
     /// Checks the sizes agree and builds the result (timings and engine
-    /// empty). Sizes are compared in u64: in usize, 65536 × 65536 wraps to 0
+    /// empty). An empty `gray` is a reply without the image
+    /// ([`ToWorker::Features`]), whatever the size. Sizes are compared in u64: in usize, 65536 × 65536 wraps to 0
     /// on wasm32 and an empty buffer would pass as a 4-gigapixel image.
     pub fn check(self) -> Result<SiftResult, String> {
         let SiftParts { width, height, gray, kp, octave, desc } = self;
-        if gray.len() as u64 != width as u64 * height as u64 {
+        if !gray.is_empty() && gray.len() as u64 != width as u64 * height as u64 {
             return Err(format!("gray buffer has {} bytes for {width}x{height}", gray.len()));
         }
         let n = octave.len() as u64;
@@ -359,6 +382,7 @@ impl SiftParts {
             decode_ms: 0.0,
             sift_ms: 0.0,
             engine: String::new(),
+            memory: 0,
         })
     }
 }

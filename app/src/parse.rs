@@ -20,3 +20,45 @@ pub fn parse_feature(text: &str) -> Result<usize, String> {
     let t = text.trim();
     t.parse::<usize>().map_err(|_| format!("feature id {t:?} is not a whole number ≥ 0"))
 }
+
+/// The most SIFT workers a page starts. Each holds its own wasm memory, which
+/// peaks at about 100 MB on a KITTI frame (measured: `memory.buffer.byteLength`
+/// after `detectAndCompute`, docs/performance.md), so 8 workers stay under a
+/// gigabyte; more cores than that are left to the trackers and the page.
+pub const MAX_WORKERS: usize = 8;
+
+/// The SIFT workers for a machine with `cores` logical cores: one per core
+/// but one (the page and the odometry's trackers need a core too), at least
+/// two (one per frame of a pair), at most [`MAX_WORKERS`]. Unknown: two.
+pub fn default_workers(cores: Option<usize>) -> usize {
+    cores.map_or(2, |c| c.saturating_sub(1)).clamp(2, MAX_WORKERS)
+}
+
+/// The `workers=N` URL parameter (teachers on shared machines, tests): a
+/// whole number from 1 to 16.
+pub fn parse_workers(text: &str) -> Result<usize, String> {
+    match text.trim().parse::<usize>() {
+        Ok(n) if (1..=16).contains(&n) => Ok(n),
+        _ => Err(format!("workers={} is not a whole number from 1 to 16; using the machine's count", text.trim())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn worker_counts() {
+        assert_eq!(default_workers(None), 2);
+        assert_eq!(default_workers(Some(1)), 2);
+        assert_eq!(default_workers(Some(2)), 2);
+        assert_eq!(default_workers(Some(4)), 3);
+        assert_eq!(default_workers(Some(8)), 7);
+        assert_eq!(default_workers(Some(16)), MAX_WORKERS);
+        assert_eq!(parse_workers(" 3 "), Ok(3));
+        assert_eq!(parse_workers("1"), Ok(1));
+        assert!(parse_workers("0").unwrap_err().starts_with("workers=0 is not"));
+        assert!(parse_workers("17").is_err());
+        assert!(parse_workers("two").is_err());
+    }
+}

@@ -4,7 +4,6 @@
 use crate::msg::{FromWorker, SiftResult, ToWorker};
 use crate::platform::now_ms;
 use siftlab_core::sift::{detect_and_compute, SiftParams};
-use siftlab_core::vo::sift_detector;
 use siftlab_core::GrayImage;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -12,43 +11,8 @@ use wasm_bindgen::JsCast;
 /// Handles one request, posting progress and the outcome through `post`.
 pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
     match msg {
-        ToWorker::Sift { id, bytes, lanes } => {
-            post(FromWorker::Progress { id, stage: "decoding the image".into() });
-            let t0 = now_ms();
-            let img = match GrayImage::decode(&bytes) {
-                Ok(img) => img,
-                Err(e) => return post(FromWorker::Failed { id, message: e.to_string() }),
-            };
-            let t1 = now_ms();
-            post(FromWorker::Progress {
-                id,
-                stage: format!("running SIFT on {}x{} (nfeatures=1500)", img.width(), img.height()),
-            });
-            // The lab's cv2.SIFT_create(nfeatures=1500), with the SIMD width of
-            // the OpenCV build being reproduced (it moves angles and descriptors by ulps).
-            let params = SiftParams { opencv_lanes: lanes as usize, ..SiftParams::default() };
-            let features = detect_and_compute(&img, &params);
-            let t2 = now_ms();
-            post(FromWorker::Done {
-                id,
-                result: SiftResult {
-                    width: img.width(),
-                    height: img.height(),
-                    gray: img.data().to_vec(),
-                    features,
-                    decode_ms: t1 - t0,
-                    sift_ms: t2 - t1,
-                    engine: siftlab_core::sift::fma_engine().to_string(),
-                },
-            });
-        }
-        ToWorker::Detect { frame, bytes } => match GrayImage::decode(&bytes) {
-            Ok(img) => {
-                let points = sift_detector(SiftParams::for_host())(&img);
-                post(FromWorker::Detected { frame, points });
-            }
-            Err(e) => post(FromWorker::Failed { id: frame, message: format!("frame {frame}: {e}") }),
-        },
+        ToWorker::Sift { id, bytes, lanes } => sift(id, &bytes, lanes, true, post),
+        ToWorker::Features { id, bytes, lanes } => sift(id, &bytes, lanes, false, post),
         ToWorker::Inside(r) => crate::inside::handle(r, post),
         ToWorker::VoStart { id, total, poses } => {
             let started = VoSession::start(id, total as usize, &poses);
@@ -70,16 +34,68 @@ pub fn handle(msg: ToWorker, post: &dyn Fn(FromWorker)) {
             }
         }
         ToWorker::VoFrame { id, frame, bytes, points } => {
-            let r = SESSION.with(|s| match s.borrow_mut().as_mut() {
-                Some(session) if session.id == id => session.frame(frame as usize, &bytes, points, post),
-                _ => Err("no odometry run is going on (it was stopped or failed)".into()),
-            });
-            if let Err(message) = r {
-                SESSION.with(|s| *s.borrow_mut() = None);
-                post(FromWorker::Failed { id, message });
-            }
+            on_session(id, post, |session| session.frame(frame as usize, Input::Image(&bytes, points), post))
+        }
+        ToWorker::VoFeatures { id, frame, features } => {
+            on_session(id, post, |session| session.frame(frame as usize, Input::Features(features), post))
         }
     }
+}
+
+/// Runs `f` on the worker's odometry session `id`; an error ends the session.
+fn on_session(id: u32, post: &dyn Fn(FromWorker), f: impl FnOnce(&mut VoSession) -> Result<(), String>) {
+    let r = SESSION.with(|s| match s.borrow_mut().as_mut() {
+        Some(session) if session.id == id => f(session),
+        _ => Err("no odometry run is going on (it was stopped or failed)".into()),
+    });
+    if let Err(message) = r {
+        SESSION.with(|s| *s.borrow_mut() = None);
+        post(FromWorker::Failed { id, message });
+    }
+}
+
+/// SIFT on one image with the lab's parameters, its stages posted as
+/// progress; the reply carries the gray image only if `with_gray`.
+fn sift(id: u32, bytes: &[u8], lanes: u32, with_gray: bool, post: &dyn Fn(FromWorker)) {
+    {
+        post(FromWorker::Progress { id, stage: "decoding the image".into() });
+        let t0 = now_ms();
+        let img = match GrayImage::decode(bytes) {
+            Ok(img) => img,
+            Err(e) => return post(FromWorker::Failed { id, message: e.to_string() }),
+        };
+        let t1 = now_ms();
+        post(FromWorker::Progress {
+            id,
+            stage: format!("running SIFT on {}x{} (nfeatures=1500)", img.width(), img.height()),
+        });
+        // The lab's cv2.SIFT_create(nfeatures=1500), with the SIMD width of
+        // the OpenCV build being reproduced (it moves angles and descriptors by ulps).
+        let params = SiftParams { opencv_lanes: lanes as usize, ..SiftParams::default() };
+        let features = detect_and_compute(&img, &params);
+        let t2 = now_ms();
+        post(FromWorker::Done {
+            id,
+            result: SiftResult {
+                width: img.width(),
+                height: img.height(),
+                gray: if with_gray { img.data().to_vec() } else { Vec::new() },
+                features,
+                decode_ms: t1 - t0,
+                sift_ms: t2 - t1,
+                engine: siftlab_core::sift::fma_engine().to_string(),
+                memory: crate::platform::wasm_memory_bytes(),
+            },
+        });
+    }
+}
+
+/// What a tracking worker gets for its next frame: the image (and the
+/// keypoints a SIFT worker found in it, if any), or a matcher-driven run's
+/// SIFT features.
+enum Input<'a> {
+    Image(&'a [u8], Option<Vec<[f32; 2]>>),
+    Features(siftlab_core::sift::Features),
 }
 
 thread_local! {
@@ -132,23 +148,22 @@ impl VoSession {
     /// trajectory error and the lab's window as PNG. `points`: the frame's
     /// keypoints if detected elsewhere (else detected here when the loop
     /// re-detects).
-    fn frame(
-        &mut self,
-        i: usize,
-        bytes: &[u8],
-        points: Option<Vec<[f32; 2]>>,
-        post: &dyn Fn(FromWorker),
-    ) -> Result<(), String> {
+    fn frame(&mut self, i: usize, input: Input, post: &dyn Fn(FromWorker)) -> Result<(), String> {
         use siftlab_core::dataset::position;
         use siftlab_core::render::{encode_png, trajectory_window, TrajectoryStyle};
         use siftlab_core::vo::ate_rmse;
         if i != self.est.len() || i >= self.total {
             return Err(format!("frame {i} arrived out of order (expected frame {})", self.est.len()));
         }
-        let img = GrayImage::decode(bytes).map_err(|e| format!("frame {i}: {e}"))?;
-        let step = match self.matched.as_mut() {
-            Some(m) => m.step(&img, self.poses.get(i)),
-            None => self.odo.step_detected(&img, self.poses.get(i), points),
+        let decode = |bytes: &[u8]| GrayImage::decode(bytes).map_err(|e| format!("frame {i}: {e}"));
+        let gt = self.poses.get(i);
+        let step = match (self.matched.as_mut(), input) {
+            (Some(m), Input::Features(f)) => m.step_features(f, gt),
+            (Some(m), Input::Image(bytes, _)) => m.step(&decode(bytes)?, gt),
+            (None, Input::Image(bytes, points)) => self.odo.step_detected(&decode(bytes)?, gt, points),
+            (None, Input::Features(_)) => {
+                return Err(format!("frame {i}: the Lucas–Kanade loop needs the image, not only its features"))
+            }
         }
         .map_err(|e| e.to_string())?;
         self.rows.push(siftlab_core::vo::pose_row(&step.rotation, &step.position));
@@ -173,7 +188,8 @@ impl VoSession {
             let gt = &self.poses[..self.rows.len()];
             let metrics = siftlab_core::vo::evaluate(&self.rows, gt).map_err(|e| e.to_string())?;
             post(FromWorker::VoMetrics { id: self.id, metrics: metrics.to_array() });
-            post(FromWorker::VoDone { id: self.id, ate, png, ms: now_ms() - self.t0 });
+            let kitti = siftlab_core::vo::kitti_rows_text(&self.rows);
+            post(FromWorker::VoDone { id: self.id, ate, png, ms: now_ms() - self.t0, kitti });
         }
         Ok(())
     }

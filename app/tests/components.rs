@@ -83,6 +83,7 @@ fn frame(i: usize) -> Arc<FrameData> {
             decode_ms: 0.0,
             sift_ms: 0.0,
             engine: String::new(),
+            memory: 0,
         },
         bytes: Arc::new(Vec::new()),
         lanes: 8,
@@ -390,10 +391,16 @@ fn worker_messages_round_trip_bit_for_bit() {
         decode_ms: 1.5,
         sift_ms: 250.0,
         engine: "SIMD128: exact multiply-add emulation".into(),
+        memory: 96 << 20,
     };
     let m = FromWorker::Done { id: 3, result };
     assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
     let s = ToWorker::Sift { id: 4, bytes: vec![1, 2, 3], lanes: 16 };
+    assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
+    let s = ToWorker::Features { id: 5, bytes: vec![1, 2, 3], lanes: 8 };
+    assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
+    let (_, _, features) = golden(3);
+    let s = ToWorker::VoFeatures { id: 1, frame: 3, features };
     assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
     for m in [
         FromWorker::Ready,
@@ -432,7 +439,7 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
             tracked: 0,
             redetected: false,
         },
-        FromWorker::VoDone { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5 },
+        FromWorker::VoDone { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5, kitti: "1 0 0 0\n".into() },
         FromWorker::VoMetrics { id: 5, metrics: [100.0, 1.1, 0.14, 0.13, 0.12, f64::NAN, f64::NAN] },
     ] {
         let back = FromWorker::from_js(&m.to_js()).unwrap();
@@ -498,7 +505,7 @@ fn streamed_odometry_equals_the_one_worker_loop() {
         got.into_inner()
     };
     let without_time = |m: FromWorker| match m {
-        FromWorker::VoDone { id, ate, png, .. } => FromWorker::VoDone { id, ate, png, ms: 0.0 },
+        FromWorker::VoDone { id, ate, png, kitti, .. } => FromWorker::VoDone { id, ate, png, ms: 0.0, kitti },
         // The KITTI figures are NaN (4 frames: no 100 m segment), and NaN != NaN.
         FromWorker::VoMetrics { id, metrics } => {
             FromWorker::VoMetrics { id, metrics: metrics.map(|v| if v.is_nan() { -1.0 } else { v }) }
@@ -512,19 +519,32 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     assert!(matches!(one_worker[5], FromWorker::VoDone { .. }));
 
     assert!(handle(ToWorker::VoStart { id: 7, total: 4, poses: poses.into() }).is_empty());
-    let mut streamed = Vec::new();
-    for (i, bytes) in frames.iter().enumerate() {
-        let points = (i != 1).then(|| {
-            let msg = ToWorker::Detect { frame: i as u32, bytes: bytes.clone() };
+    // Each frame's SIFT as the page's SIFT workers compute it (no gray image),
+    // through the postMessage encoding.
+    let features: Vec<Features> = frames
+        .iter()
+        .enumerate()
+        .map(|(i, bytes)| {
+            let msg = ToWorker::Features { id: i as u32, bytes: bytes.clone(), lanes: 8 };
             assert_eq!(ToWorker::from_js(&msg.to_js()).unwrap(), msg);
             let got = handle(msg);
-            let [FromWorker::Detected { frame, points }] = got.as_slice() else { panic!("{got:?}") };
-            assert_eq!(*frame, i as u32);
-            assert!(points.len() >= 1400, "frame {i}: {} keypoints", points.len());
-            let back = FromWorker::from_js(&got[0].to_js()).unwrap();
-            assert_eq!(back, got[0]);
-            points.clone()
-        });
+            let Some(FromWorker::Done { result, .. }) = got.last() else { panic!("{got:?}") };
+            assert!(result.gray.is_empty() && result.width == 1241, "{}x{}", result.width, result.height);
+            assert!(result.memory > 0);
+            let back = FromWorker::from_js(&got.last().unwrap().to_js()).unwrap();
+            assert_eq!(&back, got.last().unwrap());
+            assert!(
+                result.features.keypoints.len() >= 1400,
+                "frame {i}: {} keypoints",
+                result.features.keypoints.len()
+            );
+            result.features.clone()
+        })
+        .collect();
+    let mut streamed = Vec::new();
+    for (i, bytes) in frames.iter().enumerate() {
+        // As `vo_run` sends them: the keypoint positions, except on frame 1.
+        let points = (i != 1).then(|| features[i].keypoints.iter().map(|k| [k.x, k.y]).collect::<Vec<_>>());
         let msg = ToWorker::VoFrame { id: 7, frame: i as u32, bytes: bytes.clone(), points };
         assert_eq!(ToWorker::from_js(&msg.to_js()).unwrap(), msg);
         streamed.extend(handle(msg).into_iter().map(without_time));
@@ -539,10 +559,38 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     let got = handle(ToWorker::VoFrame { id: 8, frame: 0, bytes: frames[0].clone(), points: None });
     let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("no odometry run"), "{message}");
-    // A helper given a broken frame names it.
-    let got = handle(ToWorker::Detect { frame: 3, bytes: b"nope".to_vec() });
+    // An LK run refuses features without the image.
+    assert!(handle(ToWorker::VoStart { id: 9, total: 4, poses: poses.into() }).is_empty());
+    let got = handle(ToWorker::VoFeatures { id: 9, frame: 0, features: features[0].clone() });
     let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
-    assert!(message.starts_with("frame 3: not an image"), "{message}");
+    assert!(message.contains("needs the image"), "{message}");
+
+    // A matcher-driven run fed the shared features (`VoFeatures`) gives what
+    // the same run computing SIFT itself from the images gives.
+    let start =
+        |id| ToWorker::VoMatchedStart { id, total: 4, poses: poses.into(), algo: "nndr".into(), threshold: Some(0.8) };
+    let mut own = Vec::new();
+    assert!(handle(start(10)).is_empty());
+    for (i, bytes) in frames.iter().enumerate() {
+        own.extend(
+            handle(ToWorker::VoFrame { id: 10, frame: i as u32, bytes: bytes.clone(), points: None })
+                .into_iter()
+                .map(without_time),
+        );
+    }
+    let mut shared = Vec::new();
+    assert!(handle(start(10)).is_empty());
+    for (i, f) in features.into_iter().enumerate() {
+        shared.extend(
+            handle(ToWorker::VoFeatures { id: 10, frame: i as u32, features: f }).into_iter().map(without_time),
+        );
+    }
+    assert_eq!(own.len(), 6, "{own:?}");
+    assert_eq!(shared, own);
+    // A SIFT worker given a broken frame says why.
+    let got = handle(ToWorker::Features { id: 3, bytes: b"nope".to_vec(), lanes: 8 });
+    let Some(FromWorker::Failed { message, .. }) = got.last() else { panic!("{got:?}") };
+    assert!(message.starts_with("not an image"), "{message}");
 }
 
 /// The demo opens on `DEMO_FEATURE` under nndr 0.8: on OpenCV's own keypoints of

@@ -12,8 +12,10 @@ use crate::client;
 use crate::frameset::{run_from_zero, vo_frame_count, vo_range_label};
 use crate::loading;
 use crate::msg::FromWorker;
+use crate::platform::{blob_url, revoke};
 use crate::plot::{percent, vo_done_text, vo_progress_text};
 use crate::state::Lab;
+use crate::vo_run;
 use crate::vo_view::{default_threshold, tracker_strategy, RunResult, TRACKERS};
 use leptos::prelude::*;
 use siftlab_core::render::coordinates_text;
@@ -23,24 +25,24 @@ type P3 = [f64; 3];
 /// One plotted step: frame, estimate, ground truth.
 type Step = (u32, P3, Option<P3>);
 
-fn blob_url(bytes: &[u8]) -> Option<String> {
-    let parts = js_sys::Array::new();
-    parts.push(&js_sys::Uint8Array::from(bytes));
-    let blob = web_sys::Blob::new_with_u8_array_sequence(&parts).ok()?;
-    web_sys::Url::create_object_url_with_blob(&blob).ok()
-}
-
-fn revoke(url: Option<String>) {
-    if let Some(u) = url {
-        let _ = web_sys::Url::revoke_object_url(&u);
-    }
-}
-
 #[derive(Clone, Debug, PartialEq)]
 struct Done {
     ate: f64,
     png_url: Option<String>,
+    /// The estimated poses in KITTI's format (the CLI's `--save-poses`).
+    poses_url: Option<String>,
     ms: f64,
+}
+
+/// How the run was computed: SIFT workers and their memory.
+fn workers_text() -> String {
+    let n = client::worker_count();
+    let peak = client::worker_memory_peak();
+    let mem = if peak > 0 { format!(", each up to {} MB of wasm memory", peak >> 20) } else { String::new() };
+    format!(
+        "SIFT on {n} worker{}{mem}, each frame once for every tracker (add ?workers=N to the address to change the count)",
+        if n == 1 { "" } else { "s" }
+    )
 }
 
 #[component]
@@ -86,6 +88,7 @@ pub fn TrajectoryView() -> impl IntoView {
         error.set(None);
         if let Some(d) = done.get_untracked() {
             revoke(d.png_url);
+            revoke(d.poses_url);
         }
         done.set(None);
         steps.set(vec![]);
@@ -111,8 +114,8 @@ pub fn TrajectoryView() -> impl IntoView {
                     frame_url.set(url);
                 }
                 FromWorker::VoMetrics { metrics: m, .. } => metrics.set(Some(TrajectoryMetrics::from_array(&m))),
-                FromWorker::VoDone { ate, png, ms, .. } => {
-                    done.set(Some(Done { ate, png_url: blob_url(&png), ms }));
+                FromWorker::VoDone { ate, png, ms, kitti, .. } => {
+                    done.set(Some(Done { ate, png_url: blob_url(&png), poses_url: blob_url(kitti.as_bytes()), ms }));
                     running.set(false);
                 }
                 FromWorker::Failed { message, .. } => {
@@ -121,18 +124,14 @@ pub fn TrajectoryView() -> impl IntoView {
                 }
                 _ => {}
             };
-            let started = match strategy {
-                None => client::run_vo(fr, poses, on_event),
-                Some(s) => client::run_vo_matched(fr, poses, s, on_event),
-            };
-            if let Err(e) = started {
+            if let Err(e) = vo_run::start(fr, poses, &[strategy], move |_, m| on_event(m)) {
                 error.set(Some(e));
                 running.set(false);
             }
         });
     };
     let stop = move |_| {
-        client::stop_vo();
+        vo_run::stop();
         running.set(false);
     };
 
@@ -217,7 +216,10 @@ pub fn TrajectoryView() -> impl IntoView {
                     <strong data-testid="vo-ate">{format!("{:.4} m", d.ate)}</strong>
                     {vo_done_text(steps.with(|s| s.len()), d.ms)}
                     {d.png_url.map(|u| view! { " · " <a href=u download="trajectory.png" data-testid="vo-download">"download trajectory.png"</a> })}
+                    {d.poses_url.map(|u| view! { " · " <a href=u download="poses.txt" data-testid="vo-poses"
+                        title="the estimated poses, 12 numbers a line (KITTI's format, as view_trajectory --save-poses writes them)">"poses.txt"</a> })}
                 </p>
+                <p class="muted small" data-testid="vo-workers">{workers_text()}</p>
             })}
             {move || metrics.get().map(|m| view! { <p class="small" data-testid="vo-metrics">{m.summary()}</p> })}
             <VoCompare source=source count=count/>

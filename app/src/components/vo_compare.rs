@@ -1,11 +1,13 @@
-//! The comparison: LK, dt 200, nn and nndr 0.8 run one after the other on
-//! the same frames, their trajectories overlaid and their metrics in a table.
+//! The comparison: LK, dt 200, nn and nndr 0.8 run side by side on the same
+//! frames (each frame's SIFT computed once for all four), their trajectories
+//! overlaid and their metrics in a table.
 
 use super::vo_plot::VoFigures;
-use crate::client;
 use crate::loading;
 use crate::msg::FromWorker;
+use crate::platform::{blob_url, revoke};
 use crate::state::Source;
+use crate::vo_run;
 use crate::vo_view::{compare_runs, metric_cells, RunResult};
 use leptos::prelude::*;
 use siftlab_core::render::plot::figures::run_style;
@@ -23,61 +25,76 @@ struct Ctx {
     error: RwSignal<Option<String>>,
     frames: StoredValue<Vec<Vec<u8>>, LocalStorage>,
     poses: StoredValue<String>,
+    /// Per run: its estimated poses (KITTI format) as a download, once done.
+    poses_urls: RwSignal<Vec<Option<String>>>,
 }
 
-/// Starts run `k` of [`compare_runs`]; its `VoDone` starts run k + 1.
-fn start(ctx: Ctx, k: usize) {
+/// Starts the four runs of [`compare_runs`] side by side: one tracking
+/// worker each, fed from one SIFT computation per frame (`vo_run`).
+fn start(ctx: Ctx) {
     let runs = compare_runs();
-    let Some(strategy) = runs.get(k).copied() else {
-        ctx.running.set(false);
-        ctx.status.set(format!("{} runs done", runs.len()));
-        return;
-    };
-    let label = run_style(strategy.as_ref()).0;
-    ctx.status.set(format!("running {label} ({} of {})", k + 1, runs.len()));
-    ctx.results.update(|r| r.push(RunResult { strategy, positions: Vec::new(), metrics: None, ms: 0.0 }));
+    let n = runs.len();
+    ctx.results.set(
+        runs.iter().map(|&strategy| RunResult { strategy, positions: Vec::new(), metrics: None, ms: 0.0 }).collect(),
+    );
+    ctx.status.set(format!("running the {n} trackers side by side"));
+    ctx.poses_urls.update(|u| {
+        for url in u.drain(..) {
+            revoke(url);
+        }
+        u.resize(n, None);
+    });
     let frames = ctx.frames.get_value();
+    let total = frames.len();
     let poses = ctx.poses.get_value();
-    let on_event = move |m: FromWorker| match m {
-        FromWorker::VoStep { frame, position, truth, .. } => {
-            ctx.results.update(|r| {
-                if let Some(last) = r.last_mut() {
-                    last.positions.push(position);
+    // Which trackers are over (done or failed): the last one ends the comparison.
+    let over = std::rc::Rc::new(std::cell::RefCell::new(vec![false; n]));
+    let on_event = move |k: usize, m: FromWorker| {
+        let ended = match m {
+            FromWorker::VoStep { position, truth, .. } => {
+                ctx.results.update(|r| r[k].positions.push(position));
+                if k == 0 {
+                    if let Some(t) = truth {
+                        ctx.truth.update(|v| v.push(t));
+                    }
                 }
-            });
-            if k == 0 {
-                if let Some(t) = truth {
-                    ctx.truth.update(|v| v.push(t));
-                }
+                let least = ctx.results.with(|r| r.iter().map(|r| r.positions.len()).min().unwrap_or(0));
+                ctx.status.set(format!("running the {n} trackers side by side · {least} of {total} frames"));
+                false
             }
-            ctx.status.set(format!("running {label} ({} of 4) · frame {}", k + 1, frame + 1));
-        }
-        FromWorker::VoMetrics { metrics, .. } => ctx.results.update(|r| {
-            if let Some(last) = r.last_mut() {
-                last.metrics = Some(TrajectoryMetrics::from_array(&metrics));
+            FromWorker::VoMetrics { metrics, .. } => {
+                ctx.results.update(|r| r[k].metrics = Some(TrajectoryMetrics::from_array(&metrics)));
+                false
             }
-        }),
-        FromWorker::VoDone { ms, .. } => {
-            ctx.results.update(|r| {
-                if let Some(last) = r.last_mut() {
-                    last.ms = ms;
-                }
-            });
-            // The next run replaces this one's workers: start it after this
-            // message's handler has returned.
-            leptos::task::spawn_local(async move { start(ctx, k + 1) });
+            FromWorker::VoDone { ms, kitti, .. } => {
+                ctx.results.update(|r| r[k].ms = ms);
+                ctx.poses_urls.update(|u| {
+                    if let Some(slot) = u.get_mut(k) {
+                        *slot = blob_url(kitti.as_bytes());
+                    }
+                });
+                true
+            }
+            FromWorker::Failed { message, .. } => {
+                let e = format!("{}: {message}", run_style(runs[k].as_ref()).0);
+                ctx.error.update(|old| *old = Some(old.take().map_or(e.clone(), |o| format!("{o}; {e}"))));
+                true
+            }
+            _ => false,
+        };
+        if ended {
+            let all = {
+                let mut over = over.borrow_mut();
+                over[k] = true;
+                over.iter().all(|&o| o)
+            };
+            if all {
+                ctx.running.set(false);
+                ctx.status.set(format!("{n} runs done"));
+            }
         }
-        FromWorker::Failed { message, .. } => {
-            ctx.error.set(Some(format!("{label}: {message}")));
-            ctx.running.set(false);
-        }
-        _ => {}
     };
-    let started = match strategy {
-        None => client::run_vo(frames, poses, on_event),
-        Some(s) => client::run_vo_matched(frames, poses, s, on_event),
-    };
-    if let Err(e) = started {
+    if let Err(e) = vo_run::start(frames, poses, &runs, on_event) {
         ctx.error.set(Some(e));
         ctx.running.set(false);
     }
@@ -95,6 +112,7 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
         error: RwSignal::new(None),
         frames: StoredValue::new_local(Vec::new()),
         poses: StoredValue::new(String::new()),
+        poses_urls: RwSignal::new(Vec::new()),
     };
     let run = move |_| {
         let n = match count.get_untracked() {
@@ -111,7 +129,7 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
                 Ok((frames, poses)) => {
                     ctx.frames.set_value(frames);
                     ctx.poses.set_value(poses);
-                    start(ctx, 0);
+                    start(ctx);
                 }
                 Err(e) => {
                     ctx.error.set(Some(e));
@@ -124,10 +142,21 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
     let rows = move || {
         ctx.results.with(|r| {
             r.iter()
-                .filter_map(|run| run.metrics.map(|m| metric_cells(&run.plot_run().name, &m, run.ms)))
-                .map(|cells| {
+                .enumerate()
+                .filter_map(|(k, run)| run.metrics.map(|m| (k, metric_cells(&run.plot_run().name, &m, run.ms))))
+                .map(|(k, cells)| {
                     let name = cells[0].clone();
-                    view! { <tr data-testid="vo-compare-row" data-run=name>{cells.into_iter().map(|c| view! { <td>{c}</td> }).collect_view()}</tr> }
+                    let url = ctx.poses_urls.with(|u| u.get(k).cloned().flatten());
+                    let file = format!("poses_{}.txt", name.replace(' ', "_"));
+                    view! {
+                        <tr data-testid="vo-compare-row" data-run=name.clone()>
+                            {cells.into_iter().map(|c| view! { <td>{c}</td> }).collect_view()}
+                            <td>{url.map(|u| view! {
+                                <a href=u download=file.clone() data-testid="vo-compare-poses"
+                                    aria-label=format!("{name}: estimated poses, KITTI format")>{file.clone()}</a>
+                            })}</td>
+                        </tr>
+                    }
                 })
                 .collect_view()
         })
@@ -136,9 +165,9 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
         <div class="vo-compare">
             <h3>"Compare the trackers"</h3>
             <p class="muted">
-                "The same loop four times on the same frames: the lab's Lucas–Kanade tracking, and SIFT matching of consecutive frames "
+                "The same loop four times on the same frames, side by side (each frame's SIFT is computed once and shared): the lab's Lucas–Kanade tracking, and SIFT matching of consecutive frames "
                 "with dt 200, nn and nndr 0.8 (each query's nearest match feeds findEssentialMat). ATE: position error, raw and after the best rigid "
-                "alignment; RPE: error of each frame-to-frame motion; KITTI: the benchmark's error per 100–800 m segment (n/a under 100 m of path)."
+                "alignment; RPE: error of each frame-to-frame motion; KITTI: the benchmark's error per 100–800 m segment (n/a under 100 m of path); frames/s: each run's pace with all four running at once."
             </p>
             <button class="primary" data-testid="vo-compare-run" on:click=run prop:disabled=move || ctx.running.get()>
                 "Run all four"
@@ -153,7 +182,7 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
                     <table class="vo-table" data-testid="vo-compare-table">
                         <thead><tr>
                             <th>"run"</th><th>"ATE (m)"</th><th>"ATE aligned (m)"</th><th>"RPE (m)"</th><th>"RPE (°)"</th>
-                            <th>"KITTI t (%)"</th><th>"KITTI r (°/100 m)"</th><th>"frames/s"</th>
+                            <th>"KITTI t (%)"</th><th>"KITTI r (°/100 m)"</th><th>"frames/s"</th><th>"poses"</th>
                         </tr></thead>
                         <tbody>{rows}</tbody>
                     </table>

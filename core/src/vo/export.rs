@@ -4,15 +4,19 @@
 
 use super::linalg::{Mat3, Vec3};
 use super::odometry::pose_row;
+use crate::dataset::PoseRow;
 use crate::pyfmt::py_float;
 use nalgebra::{Matrix3, Rotation3, UnitQuaternion};
 
 /// KITTI lines, one per (R, position), numbers as Python prints them.
 pub fn kitti_text(poses: &[(Mat3, Vec3)]) -> String {
-    poses
-        .iter()
-        .map(|(r, t)| pose_row(r, t).iter().map(|v| py_float(*v)).collect::<Vec<_>>().join(" ") + "\n")
-        .collect()
+    let rows: Vec<PoseRow> = poses.iter().map(|(r, t)| pose_row(r, t)).collect();
+    kitti_rows_text(&rows)
+}
+
+/// [`kitti_text`] of poses already as KITTI rows (what the app's worker keeps).
+pub fn kitti_rows_text(rows: &[PoseRow]) -> String {
+    rows.iter().map(|row| row.iter().map(|v| py_float(*v)).collect::<Vec<_>>().join(" ") + "\n").collect()
 }
 
 /// The unit quaternion (x, y, z, w) of `r`, w ≥ 0 (q and −q are the same turn).

@@ -23,7 +23,7 @@ pub(crate) mod recover_pose;
 mod testing;
 
 pub use crate::camera::Camera;
-pub use export::{kitti_text, tum_text};
+pub use export::{kitti_rows_text, kitti_text, tum_text};
 pub use linalg::{det3, mat_mul, mat_vec, skew, transpose, Mat3, Vec3, IDENTITY};
 pub use lk::{calc_optical_flow_pyr_lk, LkParams, LkResult};
 pub use matched::{matched_points, run_matched, MatchedOdometry};
