@@ -1,35 +1,27 @@
 //! siftlab-app: the COMP24011 matching lab in the browser (leptos CSR).
 //!
-//! The page loads two frames, runs SIFT on them in web workers ([`client`],
-//! [`worker`]) and shows, for one feature and one strategy, every step the
-//! lab's `get_info` takes. All lab rules — SIFT, the strategies, validation,
-//! `matching_info` and its Python formatting — are the core's; this crate
-//! only loads input, calls `siftlab_core` and draws what it returns.
+//! The page loads two frames, runs SIFT on them in web workers and shows, for
+//! one feature and one strategy, every step the lab's `get_info` takes; it
+//! runs the lab's odometry and shows SIFT's anatomy. All lab rules — SIFT, the
+//! strategies, validation, `matching_info` and its Python formatting — are
+//! the core's; this crate only loads input, calls `siftlab_core` and draws
+//! what it returns. Its folders, from the bottom up (each imports only below):
+//!
+//! - [`protocol`]: the messages between the page and its workers, one codec;
+//! - [`platform`]: what the crate takes from the JavaScript platform;
+//! - [`model`]: the page's state and plain logic, no DOM;
+//! - [`worker`]: what runs inside a Web Worker;
+//! - [`services`]: the page side of the workers and of file I/O;
+//! - [`page`]: the leptos components, in the order of the page.
 
-pub mod client;
-pub mod codec;
-pub mod components;
-pub mod exercise;
-pub mod frameset;
-pub mod inside;
-pub mod jobs;
-pub mod lab_manual;
-pub mod loading;
-pub mod msg;
-pub mod msg_inside;
-pub mod parse;
+pub mod model;
+pub mod page;
 pub mod platform;
-pub mod plot;
-pub mod pylit;
-pub mod seeinside;
-pub mod selfcheck;
-pub mod state;
-pub mod urlstate;
-pub mod vo_run;
-pub mod vo_view;
+pub mod protocol;
+pub mod services;
 pub mod worker;
 
-pub use components::App;
+pub use page::App;
 
 /// Panics go to the console (and fail the e2e test's console check) instead of
 /// vanishing into an `unreachable` trap.

@@ -10,11 +10,13 @@
 #![cfg(target_arch = "wasm32")]
 
 use leptos::prelude::*;
-use siftlab_app::client::FrameData;
-use siftlab_app::components::{apply_url, url_state, Explorer, DEMO_FEATURE};
-use siftlab_app::msg::{FromWorker, SiftResult, ToWorker};
-use siftlab_app::state::{analyse, nearest_keypoint, Lab, Source};
-use siftlab_app::urlstate::UrlState;
+use siftlab_app::model::frame::FrameData;
+use siftlab_app::model::lab::{analyse, nearest_keypoint, Lab, Source};
+use siftlab_app::model::urlstate::UrlState;
+use siftlab_app::page::{apply_url, url_state, Explorer, DEMO_FEATURE};
+use siftlab_app::protocol::odometry::{VoReply, VoRequest};
+use siftlab_app::protocol::sift::{SiftReply, SiftRequest, SiftResult};
+use siftlab_app::protocol::{is_ready, ready_js, Request};
 use siftlab_core::matching::StrategyKind;
 use siftlab_core::sift::{Features, KeyPoint};
 use std::sync::Arc;
@@ -246,11 +248,12 @@ async fn shows_counts_explanation_and_error_for_bad_settings() {
 async fn a_load_error_is_inline_and_keeps_the_loaded_frames() {
     // What the worker answers for a non-image (the core's decoder message)...
     let got = std::cell::RefCell::new(Vec::new());
-    siftlab_app::worker::handle(ToWorker::Sift { id: 9, bytes: b"GIF89a not really".to_vec(), lanes: 8 }, &|m| {
-        got.borrow_mut().push(m)
-    });
+    siftlab_app::worker::sift::handle(
+        SiftRequest::Sift { id: 9, bytes: b"GIF89a not really".to_vec(), lanes: 8 },
+        &|m| got.borrow_mut().push(m),
+    );
     let got = got.into_inner();
-    let FromWorker::Failed { id: 9, message } = got.last().unwrap().clone() else { panic!("{got:?}") };
+    let SiftReply::Failed { id: 9, message } = got.last().unwrap().clone() else { panic!("{got:?}") };
     assert!(message.contains("not an image") || message.contains("unsupported"), "{message}");
     // ...is shown inline while the previous result stays on screen.
     let lab = loaded_lab(1);
@@ -393,35 +396,35 @@ fn worker_messages_round_trip_bit_for_bit() {
         engine: "SIMD128: exact multiply-add emulation".into(),
         memory: 96 << 20,
     };
-    let m = FromWorker::Done { id: 3, result };
-    assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
-    let s = ToWorker::Sift { id: 4, bytes: vec![1, 2, 3], lanes: 16 };
-    assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
-    let s = ToWorker::Features { id: 5, bytes: vec![1, 2, 3], lanes: 8 };
-    assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
-    let (_, _, features) = golden(3);
-    let s = ToWorker::VoFeatures { id: 1, frame: 3, features };
-    assert_eq!(ToWorker::from_js(&s.to_js()).unwrap(), s);
-    for m in [
-        FromWorker::Ready,
-        FromWorker::Progress { id: 1, stage: "x".into() },
-        FromWorker::Failed { id: 2, message: "m".into() },
+    let m = SiftReply::Done { id: 3, result };
+    assert_eq!(SiftReply::from_js(&m.to_js()).unwrap(), m);
+    for s in [
+        SiftRequest::Sift { id: 4, bytes: vec![1, 2, 3], lanes: 16 },
+        SiftRequest::Features { id: 5, bytes: vec![1, 2, 3], lanes: 8 },
     ] {
-        assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
+        assert_eq!(Request::from_js(&s.to_js()).unwrap(), Request::Sift(s));
     }
-    assert!(FromWorker::from_js(&wasm_bindgen::JsValue::from_str("junk")).is_err());
+    let (_, _, features) = golden(3);
+    let s = VoRequest::Features { id: 1, frame: 3, features };
+    assert_eq!(Request::from_js(&s.to_js()).unwrap(), Request::Odometry(s));
+    assert!(is_ready(&ready_js()));
+    assert!(Request::from_js(&ready_js()).unwrap_err().contains("unknown message type"));
+    for m in [SiftReply::Progress { id: 1, stage: "x".into() }, SiftReply::Failed { id: 2, message: "m".into() }] {
+        assert_eq!(SiftReply::from_js(&m.to_js()).unwrap(), m);
+    }
+    assert!(SiftReply::from_js(&wasm_bindgen::JsValue::from_str("junk")).is_err());
 }
 
 #[wasm_bindgen_test]
 fn odometry_messages_round_trip_and_bad_poses_are_named() {
-    let v = ToWorker::VoStart { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
-    assert_eq!(ToWorker::from_js(&v.to_js()).unwrap(), v);
+    let v = VoRequest::Start { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
+    assert_eq!(Request::from_js(&v.to_js()).unwrap(), Request::Odometry(v));
     for threshold in [Some(0.8), None] {
-        let v = ToWorker::VoMatchedStart { id: 5, total: 2, poses: "p".into(), algo: "nndr".into(), threshold };
-        assert_eq!(ToWorker::from_js(&v.to_js()).unwrap(), v);
+        let v = VoRequest::MatchedStart { id: 5, total: 2, poses: "p".into(), algo: "nndr".into(), threshold };
+        assert_eq!(Request::from_js(&v.to_js()).unwrap(), Request::Odometry(v));
     }
     for m in [
-        FromWorker::VoStep {
+        VoReply::Step {
             id: 5,
             frame: 2,
             total: 6,
@@ -430,55 +433,46 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
             tracked: 1400,
             redetected: true,
         },
-        FromWorker::VoStep {
-            id: 5,
-            frame: 0,
-            total: 6,
-            position: [0.0; 3],
-            truth: None,
-            tracked: 0,
-            redetected: false,
-        },
-        FromWorker::VoDone { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5, kitti: "1 0 0 0\n".into() },
-        FromWorker::VoMetrics { id: 5, metrics: [100.0, 1.1, 0.14, 0.13, 0.12, f64::NAN, f64::NAN] },
+        VoReply::Step { id: 5, frame: 0, total: 6, position: [0.0; 3], truth: None, tracked: 0, redetected: false },
+        VoReply::Done { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5, kitti: "1 0 0 0\n".into() },
+        VoReply::Metrics { id: 5, metrics: [100.0, 1.1, 0.14, 0.13, 0.12, f64::NAN, f64::NAN] },
     ] {
-        let back = FromWorker::from_js(&m.to_js()).unwrap();
-        if let (FromWorker::VoMetrics { metrics: a, .. }, FromWorker::VoMetrics { metrics: b, .. }) = (&back, &m) {
+        let back = VoReply::from_js(&m.to_js()).unwrap();
+        if let (VoReply::Metrics { metrics: a, .. }, VoReply::Metrics { metrics: b, .. }) = (&back, &m) {
             // NaN (no KITTI segment) is not equal to itself: compare the bits.
             assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits));
             continue;
         }
-        assert_eq!(FromWorker::from_js(&m.to_js()).unwrap(), m);
+        assert_eq!(VoReply::from_js(&m.to_js()).unwrap(), m);
     }
     let run = |frames: Vec<Vec<u8>>, poses: &str| one_worker_odometry(1, frames, poses);
     // Malformed poses and too few poses fail before any SIFT runs, with the file named.
     let got = run(vec![vec![0; 4]; 2], "1 0 0 0\n");
-    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.starts_with("poses/00.txt"), "{message}");
     let got = run(vec![vec![0; 4]; 3], "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n");
-    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("2 poses but 3 frames"), "{message}");
     // A frame that is not an image: named by its index.
     let got = run(vec![b"nope".to_vec(); 2], "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n");
-    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.starts_with("frame 0: not an image"), "{message}");
 }
 
 /// The lab's odometry loop in one worker: `VoStart`, then every frame with no
 /// keypoints given (the worker detects where the loop re-detects), until the
 /// first failure.
-fn one_worker_odometry(id: u32, frames: Vec<Vec<u8>>, poses: &str) -> Vec<FromWorker> {
+fn one_worker_odometry(id: u32, frames: Vec<Vec<u8>>, poses: &str) -> Vec<VoReply> {
     let got = std::cell::RefCell::new(Vec::new());
-    let post = |m: FromWorker| got.borrow_mut().push(m);
-    let failed =
-        |got: &std::cell::RefCell<Vec<FromWorker>>| matches!(got.borrow().last(), Some(FromWorker::Failed { .. }));
+    let post = |m: VoReply| got.borrow_mut().push(m);
+    let failed = |got: &std::cell::RefCell<Vec<VoReply>>| matches!(got.borrow().last(), Some(VoReply::Failed { .. }));
     let total = frames.len() as u32;
-    siftlab_app::worker::handle(ToWorker::VoStart { id, total, poses: poses.into() }, &post);
+    siftlab_app::worker::odometry::handle(VoRequest::Start { id, total, poses: poses.into() }, &post);
     for (i, bytes) in frames.into_iter().enumerate() {
         if failed(&got) {
             break;
         }
-        siftlab_app::worker::handle(ToWorker::VoFrame { id, frame: i as u32, bytes, points: None }, &post);
+        siftlab_app::worker::odometry::handle(VoRequest::Frame { id, frame: i as u32, bytes, points: None }, &post);
     }
     got.into_inner()
 }
@@ -499,39 +493,44 @@ fn streamed_odometry_equals_the_one_worker_loop() {
         })
         .collect();
     let poses = include_str!("../../www/demo/MyKITTI/poses/00.txt");
-    let handle = |m: ToWorker| {
+    let handle = |m: VoRequest| {
         let got = std::cell::RefCell::new(Vec::new());
-        siftlab_app::worker::handle(m, &|m| got.borrow_mut().push(m));
+        siftlab_app::worker::odometry::handle(m, &|m| got.borrow_mut().push(m));
         got.into_inner()
     };
-    let without_time = |m: FromWorker| match m {
-        FromWorker::VoDone { id, ate, png, kitti, .. } => FromWorker::VoDone { id, ate, png, ms: 0.0, kitti },
+    let handle_sift = |m: SiftRequest| {
+        let got = std::cell::RefCell::new(Vec::new());
+        siftlab_app::worker::sift::handle(m, &|m| got.borrow_mut().push(m));
+        got.into_inner()
+    };
+    let without_time = |m: VoReply| match m {
+        VoReply::Done { id, ate, png, kitti, .. } => VoReply::Done { id, ate, png, ms: 0.0, kitti },
         // The KITTI figures are NaN (4 frames: no 100 m segment), and NaN != NaN.
-        FromWorker::VoMetrics { id, metrics } => {
-            FromWorker::VoMetrics { id, metrics: metrics.map(|v| if v.is_nan() { -1.0 } else { v }) }
+        VoReply::Metrics { id, metrics } => {
+            VoReply::Metrics { id, metrics: metrics.map(|v| if v.is_nan() { -1.0 } else { v }) }
         }
         m => m,
     };
-    let one_worker: Vec<FromWorker> =
+    let one_worker: Vec<VoReply> =
         one_worker_odometry(7, frames.clone(), poses).into_iter().map(without_time).collect();
     assert_eq!(one_worker.len(), 6, "{one_worker:?}");
-    assert!(matches!(one_worker[4], FromWorker::VoMetrics { metrics, .. } if metrics[0] == 4.0));
-    assert!(matches!(one_worker[5], FromWorker::VoDone { .. }));
+    assert!(matches!(one_worker[4], VoReply::Metrics { metrics, .. } if metrics[0] == 4.0));
+    assert!(matches!(one_worker[5], VoReply::Done { .. }));
 
-    assert!(handle(ToWorker::VoStart { id: 7, total: 4, poses: poses.into() }).is_empty());
+    assert!(handle(VoRequest::Start { id: 7, total: 4, poses: poses.into() }).is_empty());
     // Each frame's SIFT as the page's SIFT workers compute it (no gray image),
     // through the postMessage encoding.
     let features: Vec<Features> = frames
         .iter()
         .enumerate()
         .map(|(i, bytes)| {
-            let msg = ToWorker::Features { id: i as u32, bytes: bytes.clone(), lanes: 8 };
-            assert_eq!(ToWorker::from_js(&msg.to_js()).unwrap(), msg);
-            let got = handle(msg);
-            let Some(FromWorker::Done { result, .. }) = got.last() else { panic!("{got:?}") };
+            let msg = SiftRequest::Features { id: i as u32, bytes: bytes.clone(), lanes: 8 };
+            assert_eq!(Request::from_js(&msg.to_js()).unwrap(), Request::Sift(msg.clone()));
+            let got = handle_sift(msg);
+            let Some(SiftReply::Done { result, .. }) = got.last() else { panic!("{got:?}") };
             assert!(result.gray.is_empty() && result.width == 1241, "{}x{}", result.width, result.height);
             assert!(result.memory > 0);
-            let back = FromWorker::from_js(&got.last().unwrap().to_js()).unwrap();
+            let back = SiftReply::from_js(&got.last().unwrap().to_js()).unwrap();
             assert_eq!(&back, got.last().unwrap());
             assert!(
                 result.features.keypoints.len() >= 1400,
@@ -545,35 +544,35 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     for (i, bytes) in frames.iter().enumerate() {
         // As `vo_run` sends them: the keypoint positions, except on frame 1.
         let points = (i != 1).then(|| features[i].keypoints.iter().map(|k| [k.x, k.y]).collect::<Vec<_>>());
-        let msg = ToWorker::VoFrame { id: 7, frame: i as u32, bytes: bytes.clone(), points };
-        assert_eq!(ToWorker::from_js(&msg.to_js()).unwrap(), msg);
+        let msg = VoRequest::Frame { id: 7, frame: i as u32, bytes: bytes.clone(), points };
+        assert_eq!(Request::from_js(&msg.to_js()).unwrap(), Request::Odometry(msg.clone()));
         streamed.extend(handle(msg).into_iter().map(without_time));
     }
     assert_eq!(streamed, one_worker);
 
     // A frame out of turn ends the run with a message, and later frames are refused.
-    assert!(handle(ToWorker::VoStart { id: 8, total: 4, poses: poses.into() }).is_empty());
-    let got = handle(ToWorker::VoFrame { id: 8, frame: 2, bytes: frames[2].clone(), points: None });
-    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(handle(VoRequest::Start { id: 8, total: 4, poses: poses.into() }).is_empty());
+    let got = handle(VoRequest::Frame { id: 8, frame: 2, bytes: frames[2].clone(), points: None });
+    let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("out of order"), "{message}");
-    let got = handle(ToWorker::VoFrame { id: 8, frame: 0, bytes: frames[0].clone(), points: None });
-    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    let got = handle(VoRequest::Frame { id: 8, frame: 0, bytes: frames[0].clone(), points: None });
+    let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("no odometry run"), "{message}");
     // An LK run refuses features without the image.
-    assert!(handle(ToWorker::VoStart { id: 9, total: 4, poses: poses.into() }).is_empty());
-    let got = handle(ToWorker::VoFeatures { id: 9, frame: 0, features: features[0].clone() });
-    let [FromWorker::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(handle(VoRequest::Start { id: 9, total: 4, poses: poses.into() }).is_empty());
+    let got = handle(VoRequest::Features { id: 9, frame: 0, features: features[0].clone() });
+    let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("needs the image"), "{message}");
 
     // A matcher-driven run fed the shared features (`VoFeatures`) gives what
     // the same run computing SIFT itself from the images gives.
     let start =
-        |id| ToWorker::VoMatchedStart { id, total: 4, poses: poses.into(), algo: "nndr".into(), threshold: Some(0.8) };
+        |id| VoRequest::MatchedStart { id, total: 4, poses: poses.into(), algo: "nndr".into(), threshold: Some(0.8) };
     let mut own = Vec::new();
     assert!(handle(start(10)).is_empty());
     for (i, bytes) in frames.iter().enumerate() {
         own.extend(
-            handle(ToWorker::VoFrame { id: 10, frame: i as u32, bytes: bytes.clone(), points: None })
+            handle(VoRequest::Frame { id: 10, frame: i as u32, bytes: bytes.clone(), points: None })
                 .into_iter()
                 .map(without_time),
         );
@@ -581,15 +580,14 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     let mut shared = Vec::new();
     assert!(handle(start(10)).is_empty());
     for (i, f) in features.into_iter().enumerate() {
-        shared.extend(
-            handle(ToWorker::VoFeatures { id: 10, frame: i as u32, features: f }).into_iter().map(without_time),
-        );
+        shared
+            .extend(handle(VoRequest::Features { id: 10, frame: i as u32, features: f }).into_iter().map(without_time));
     }
     assert_eq!(own.len(), 6, "{own:?}");
     assert_eq!(shared, own);
     // A SIFT worker given a broken frame says why.
-    let got = handle(ToWorker::Features { id: 3, bytes: b"nope".to_vec(), lanes: 8 });
-    let Some(FromWorker::Failed { message, .. }) = got.last() else { panic!("{got:?}") };
+    let got = handle_sift(SiftRequest::Features { id: 3, bytes: b"nope".to_vec(), lanes: 8 });
+    let Some(SiftReply::Failed { message, .. }) = got.last() else { panic!("{got:?}") };
     assert!(message.starts_with("not an image"), "{message}");
 }
 

@@ -9,11 +9,11 @@
 #![cfg(target_arch = "wasm32")]
 
 use leptos::prelude::*;
-use siftlab_app::client::{Frame, FrameData};
-use siftlab_app::components::{current_example, Explorer};
-use siftlab_app::loading::frame_path;
-use siftlab_app::msg::{FromWorker, ToWorker};
-use siftlab_app::state::{analyse, Lab, Source};
+use siftlab_app::model::frame::{Frame, FrameData};
+use siftlab_app::model::lab::{analyse, Lab, Source};
+use siftlab_app::page::{current_example, Explorer};
+use siftlab_app::protocol::sift::{SiftReply, SiftRequest};
+use siftlab_app::services::loading::frame_path;
 use siftlab_core::manual::EXAMPLES;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -37,10 +37,12 @@ fn png(id: u32) -> &'static [u8] {
 fn sift(id: u32) -> Frame {
     let bytes = png(id).to_vec();
     let got = std::cell::RefCell::new(Vec::new());
-    siftlab_app::worker::handle(ToWorker::Sift { id, bytes: bytes.clone(), lanes: 8 }, &|m| got.borrow_mut().push(m));
+    siftlab_app::worker::sift::handle(SiftRequest::Sift { id, bytes: bytes.clone(), lanes: 8 }, &|m| {
+        got.borrow_mut().push(m)
+    });
     // Through the postMessage encoding too, as the page receives it.
     let last = got.into_inner().pop().unwrap().to_js();
-    let FromWorker::Done { result, .. } = FromWorker::from_js(&last).unwrap() else { panic!("frame {id}: no result") };
+    let SiftReply::Done { result, .. } = SiftReply::from_js(&last).unwrap() else { panic!("frame {id}: no result") };
     Arc::new(FrameData::from_result(frame_path(id), result, Arc::new(bytes), 8))
 }
 
@@ -54,8 +56,8 @@ async fn the_manual_examples_through_the_app() {
     // The model: every example's tuple is the manual's.
     for ex in &EXAMPLES {
         let f = ex.frame as u32;
-        let t = siftlab_app::lab_manual::threshold_text(ex);
-        let kind = siftlab_app::lab_manual::example_kind(ex).unwrap();
+        let t = siftlab_app::model::lab_manual::threshold_text(ex);
+        let kind = siftlab_app::model::lab_manual::example_kind(ex).unwrap();
         let a = analyse(&frames[&(f - 1)], &frames[&f], kind, &t, &ex.feature.to_string()).unwrap();
         assert_eq!(a.tuple, ex.expected, "{}", ex.command());
     }

@@ -5,9 +5,10 @@
 //! `app/tests/fuzz_regressions.rs`.
 #![allow(dead_code)]
 
-use siftlab_app::msg::{points_field, u32_field, vec3_field, SiftParts, KP_FLOATS};
-use siftlab_app::urlstate::UrlState;
-use siftlab_app::{exercise, frameset, pylit};
+use siftlab_app::model::urlstate::UrlState;
+use siftlab_app::model::{exercise, frameset, pylit};
+use siftlab_app::protocol::codec::{features_from_parts, points_field, u32_field, vec3_field, KP_FLOATS};
+use siftlab_app::protocol::sift::SiftParts;
 
 fn take<'a>(d: &mut &'a [u8], n: usize) -> &'a [u8] {
     let (a, b) = d.split_at(n.min(d.len()));
@@ -77,21 +78,24 @@ fn message(d: &mut &[u8]) {
     };
     let (width, height) = (dim(), dim());
     let (gl, kl, ol, dl) = (byte(d) as usize, byte(d) as usize % 16, byte(d) as usize % 4, byte(d) as usize % 4);
-    let parts = SiftParts {
-        width,
-        height,
-        gray: vec![7; gl],
-        kp: vec![1.5; kl],
-        octave: vec![3; ol],
-        desc: vec![9; dl * 128 + usize::from(dl == 3)],
-    };
-    match parts.check() {
-        Ok(r) => {
-            assert_eq!(r.gray.len() as u64, width as u64 * height as u64);
-            assert_eq!((r.width, r.height), (width as usize, height as usize));
-            assert_eq!(r.features.keypoints.len(), ol);
-            assert_eq!(r.features.descriptors.len(), ol);
+    let desc = vec![9; dl * 128 + usize::from(dl == 3)];
+    let features = match features_from_parts(&vec![1.5; kl], &vec![3; ol], &desc) {
+        Ok(f) => {
+            assert_eq!(f.keypoints.len(), ol);
+            assert_eq!(f.descriptors.len(), ol);
             assert_eq!(kl, ol * KP_FLOATS);
+            f
+        }
+        Err(m) => {
+            assert!(!m.is_empty());
+            Default::default()
+        }
+    };
+    match (SiftParts { width, height, gray: vec![7; gl], features }).check() {
+        // An empty gray buffer is a reply without the image, whatever the size.
+        Ok(r) => {
+            assert!(r.gray.is_empty() || r.gray.len() as u64 == width as u64 * height as u64);
+            assert_eq!((r.width, r.height), (width as usize, height as usize));
         }
         Err(m) => assert!(!m.is_empty()),
     }

@@ -10,7 +10,7 @@ import { execFileSync, spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { suite, ROOT } from './harness.mjs';
+import { suite, sleep, ROOT } from './harness.mjs';
 
 const ENGINE = process.env.E2E_ENGINE || 'chromium';
 // The odometry cases' FRAME_ID: the demo's whole straight run (0–99) where SIFT takes
@@ -389,12 +389,17 @@ test('two frames by picker and by drag and drop equal the CLI on that pair', asy
 });
 
 test('check my answer and a seeded exercise', async () => {
+  // Checked the moment the result appears, not once the page is idle: the verdict
+  // stays while the page finishes loading (it answers the same question).
   await page.goto(`${BASE}?lanes=${LANES}&algo=nn&feature=77`);
-  await idle();
   const right = cliRet(['-a', 'nn', '1', '77']);
+  await page.waitForFunction((sel) => (document.querySelector(sel)?.textContent || '').startsWith('(('), tid('result-tuple'), { timeout: 180000 });
   await page.fill(tid('answer'), `ret value: ${right}`);
   await page.click(tid('check'));
   assert.match(await page.textContent(tid('check-result')), /Correct/);
+  await idle();
+  await sleep(1000);
+  assert.match(await page.textContent(tid('check-result')), /Correct/, 'the verdict was cleared by a recomputation');
   // Float query coordinates (no int()): the diagnosis names it.
   const wrong = right.replace(/^\(\((\d+), (\d+)\)/, (m, x, y) => `((${x}.5, ${y}.25)`);
   assert.notEqual(wrong, right);

@@ -2,7 +2,7 @@
 // time against an older build, in one run (Playwright; the builds alternate round by round):
 //   node tests/e2e/bench_workers.mjs [--before DIST] [--rounds R] [--frames F]
 // - the odometry view (LK) on frames 0 … F−1 with workers=1, 2 and 3: frames/s from the
-//   page's own "over N frames · S s";
+//   page's own "over N frames · S s"; and with the default workers, in both builds;
 // - the comparison view ("Run all four") on the same frames with the default workers: wall
 //   time from the click to "4 runs done", this build (dist/) and, with --before, an older
 //   build's dist/ served beside it.
@@ -37,15 +37,21 @@ async function open(base, query = '') {
 
 const fps = { 1: [], 2: [], 3: [] };
 const compare = Object.fromEntries(Object.keys(servers).map((k) => [k, []]));
+const odometry = Object.fromEntries(Object.keys(servers).map((k) => [k, []]));
+let workersText;
+// The odometry view's LK run: frames/s from its own "over N frames · S s".
+async function odometryFps(base, query) {
+  const page = await open(base, query);
+  await page.click(tid('vo-run'));
+  await page.waitForSelector(tid('vo-ate'), { timeout: 1800000 });
+  const m = (await page.textContent('.trajectory')).match(/over (\d+) frames · ([\d.]+) s/);
+  if (await page.$(tid('vo-workers'))) workersText = await page.textContent(tid('vo-workers'));
+  await page.close();
+  return +(Number(m[1]) / Number(m[2])).toFixed(2);
+}
 for (let r = 0; r < rounds; r++) {
-  for (const n of Object.keys(fps)) {
-    const page = await open(servers.after.base, `?workers=${n}`);
-    await page.click(tid('vo-run'));
-    await page.waitForSelector(tid('vo-ate'), { timeout: 1800000 });
-    const m = (await page.textContent('.trajectory')).match(/over (\d+) frames · ([\d.]+) s/);
-    fps[n].push(+(Number(m[1]) / Number(m[2])).toFixed(2));
-    await page.close();
-  }
+  for (const n of Object.keys(fps)) fps[n].push(await odometryFps(servers.after.base, `?workers=${n}`));
+  for (const [name, server] of Object.entries(servers)) odometry[name].push(await odometryFps(server.base, ''));
   for (const [name, server] of Object.entries(servers)) {
     const page = await open(server.base);
     const t0 = Date.now();
@@ -62,6 +68,8 @@ const out = {
   rounds,
   cores: (await import('node:os')).cpus().length,
   odometryFramesPerS: fps,
+  odometryDefaultFramesPerS: odometry,
+  workersText,
   compareWallS: compare,
   medianCompareWallS: Object.fromEntries(Object.entries(compare).map(([k, v]) => [k, median(v)])),
 };

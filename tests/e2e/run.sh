@@ -6,7 +6,8 @@
 #             engine, under an X display (xvfb-run)
 # each running every case of app.test.mjs over W3C WebDriver (harness.mjs), checked against
 # the native CLI, and the accessibility checks (a11y.test.mjs: axe-core, 390 px, colour-vision
-# screenshots); then Playwright's Chromium-only extras (chromium-extras.test.mjs).
+# screenshots); then Playwright's Chromium-only extras (chromium-extras.test.mjs) and the
+# worker counts (workers.test.mjs: workers=1, 2, 3, 8 give the CLI's poses).
 #   E2E_ENGINES="chromium webkit" tests/e2e/run.sh      a subset of engines
 # Installs the npm packages and builds what is missing (dist/, the CLI). Screenshots and
 # measured figures land in tests/e2e/screenshots/<engine>/ (gitignored).
@@ -60,6 +61,9 @@ done
 if [[ " $ENGINES " == *" chromium "* ]]; then
     echo "[e2e] === chromium (Playwright): chromium-extras.test.mjs" >&2
     node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 chromium-extras.test.mjs || STATUS=1
+    # workers=1, 2, 3, 8: the odometry's and the comparison's poses equal the CLI's.
+    echo "[e2e] === chromium (Playwright): workers.test.mjs" >&2
+    node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 workers.test.mjs || STATUS=1
 fi
 
 echo "[e2e] per engine:" >&2

@@ -4,10 +4,11 @@
 //! `matches.png` in the current folder, as the lab's view commands write
 //! theirs.
 
-use super::{expand_home, load_frame, parse_index, parse_threshold, sift_params, Cli};
+use super::{expand_home, load_frame, parse_threshold, sift_params, Cli};
 use crate::camera::Camera;
 use crate::dataset::{parse_poses, POSES_FILE};
 use crate::error::{Error, Result};
+use crate::matching::args::parse_index;
 use crate::matching::epipolar::{fundamental, judge, Verdicts};
 use crate::matching::{match_all, DMatch, Strategy};
 use crate::render::{encode_png, whole_frame};

@@ -10,6 +10,7 @@ pub mod visual;
 
 use crate::error::{Error, Result};
 use crate::image::GrayImage;
+use crate::matching::args::parse_index;
 use crate::matching::{match_feature, matching_info, MatchInfo, Strategy};
 use crate::pyfmt::{py_float, py_str};
 use crate::sift::{detect_and_compute, Features, SiftParams};
@@ -240,24 +241,8 @@ pub struct MatchContext {
     pub matches: Vec<crate::matching::DMatch>,
 }
 
-fn parse_index(s: &str, what: &str) -> Result<usize> {
-    let v: i64 =
-        s.trim().parse().map_err(|_| Error::InvalidArgument(format!("{what} must be a whole number, got '{s}'")))?;
-    if v < 0 {
-        return Err(Error::InvalidArgument(format!("{what} must be >= 0, got {v}")));
-    }
-    Ok(v as usize)
-}
-
 fn parse_threshold(s: &Option<String>) -> Result<Option<f64>> {
-    match s {
-        None => Ok(None),
-        Some(s) => s
-            .trim()
-            .parse::<f64>()
-            .map(Some)
-            .map_err(|_| Error::InvalidArgument(format!("threshold must be a number, got '{s}'"))),
-    }
+    s.as_deref().map(crate::matching::args::parse_threshold).transpose()
 }
 
 /// `~` expands like the lab's `os.path.expanduser`.

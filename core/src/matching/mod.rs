@@ -9,6 +9,7 @@
 pub(crate) mod distance;
 // Whole-frame matching judged by the true geometry, and the threshold sweep:
 // APIs of their own for the app's "see inside" view and `match_all`.
+pub mod args;
 pub mod epipolar;
 pub(crate) mod explain;
 pub(crate) mod info;

@@ -241,12 +241,19 @@ fn unscaled(src: &RefinedPoint) -> Refined {
 /// 0..255 (rounded and clamped); a DoG level is centred on 128 and scaled by
 /// its largest |value|, so its sign stays visible.
 pub fn level_to_gray(plane: &Plane, dog: bool) -> Vec<u8> {
+    values_to_gray(&plane.data, dog)
+}
+
+/// [`level_to_gray`] of a level's values (or a thumbnail's: a DoG is then
+/// scaled by the thumbnail's own peak), the one rule the CLI's PNGs and the
+/// app's canvases share.
+pub fn values_to_gray(values: &[f32], dog: bool) -> Vec<u8> {
     if !dog {
-        return plane.data.iter().map(|&v| v.round().clamp(0.0, 255.0) as u8).collect();
+        return values.iter().map(|&v| v.round().clamp(0.0, 255.0) as u8).collect();
     }
-    let peak = plane.data.iter().fold(0f32, |m, v| m.max(v.abs()));
+    let peak = values.iter().fold(0f32, |m, v| m.max(v.abs()));
     let k = if peak > 0.0 { 127.0 / peak } else { 0.0 };
-    plane.data.iter().map(|&v| (128.0 + v * k).round().clamp(0.0, 255.0) as u8).collect()
+    values.iter().map(|&v| (128.0 + v * k).round().clamp(0.0, 255.0) as u8).collect()
 }
 
 /// Every `step`-th pixel of every `step`-th row: a thumbnail whose values

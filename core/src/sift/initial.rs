@@ -15,9 +15,8 @@ pub fn initial_image(img: &GrayImage, sigma: f64) -> Plane {
 }
 
 /// The ×2 upsampled image for the blur: the horizontal pass stored, each
-/// output row's vertical blend made when the blur reads it. The upsampled
-/// plane (7.5 MB for a KITTI frame) was written once and read once; now its
-/// rows live in the blur's row buffer.
+/// output row's vertical blend made when the blur reads it, so the
+/// upsampled plane is never stored: its rows live in the blur's row buffer.
 struct Upsampled {
     /// The horizontal pass: 2w × h.
     tmp: Plane,

@@ -47,8 +47,7 @@ const BAND: usize = 32;
 /// On one thread (an odometry detection worker) without the pyramid kept,
 /// each octave is scanned as soon as it is blurred, and its planes go back
 /// to the pool before the next octave's are taken, so a worker holds one
-/// octave (45 MB on KITTI's first) instead of the whole pyramid (60 MB):
-/// peak RSS of a 99-frame `view_trajectory` 140 → 114 MB. Otherwise the
+/// octave instead of the whole pyramid (docs/performance.md, Memory). Otherwise the
 /// whole pyramid is built first and all octaves' scans share out over the
 /// threads at once. Same keypoints either way: §SIFT-10 sorts them all.
 ///

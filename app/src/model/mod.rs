@@ -1,0 +1,17 @@
+//! The page's state and plain logic, no DOM: the lab's settings and analysis
+//! ([`lab`]), parsing, the URL, frame sets, exercises and self-checks, the
+//! manual's examples, Python literals, the odometry views' logic and the
+//! figures' geometry.
+
+pub mod exercise;
+pub mod frame;
+pub mod frameset;
+pub mod lab;
+pub mod lab_manual;
+pub mod odometry;
+pub mod parse;
+pub mod plot;
+pub mod pylit;
+pub mod see_inside;
+pub mod selfcheck;
+pub mod urlstate;

@@ -1,0 +1,134 @@
+//! The odometry views' logic as plain functions: which tracker the controls
+//! ask for, the four runs of the comparison, the metrics table's cells and the
+//! hover text. The figures themselves are the core's (`render::plot`), the
+//! same the CLI's `--plot` writes.
+
+use crate::model::parse::{parse_threshold, threshold_text};
+use siftlab_core::matching::{args, Strategy, StrategyKind};
+use siftlab_core::render::plot::axes::nearest_xz;
+use siftlab_core::render::plot::figures::{run_style, Run};
+use siftlab_core::vo::TrajectoryMetrics;
+
+/// The tracker menu's choices: the lab's LK, or one of the strategies.
+pub const TRACKERS: [&str; 4] = ["lk", "dt", "nn", "nndr"];
+
+/// The threshold a strategy starts with in the menu (the README's figures).
+pub fn default_threshold(tracker: &str) -> String {
+    threshold_text(StrategyKind::parse(tracker).and_then(args::odometry_default))
+}
+
+/// The tracker the controls describe: `None` for LK, else the strategy with
+/// the core's checks and messages (an empty threshold is no threshold).
+pub fn tracker_strategy(tracker: &str, threshold: &str) -> Result<Option<Strategy>, String> {
+    if tracker == "lk" {
+        return Ok(None);
+    }
+    Strategy::parse(tracker, parse_threshold(threshold)?).map(Some).map_err(|e| e.to_string())
+}
+
+/// The comparison's runs, in the table's order: LK, then each strategy at
+/// its odometry default (dt 200, nn, nndr 0.8).
+pub fn compare_runs() -> [Option<Strategy>; 4] {
+    let with = |kind: StrategyKind| Strategy::parse(kind.name(), args::odometry_default(kind)).ok();
+    [None, with(StrategyKind::Dt), with(StrategyKind::Nn), with(StrategyKind::Nndr)]
+}
+
+/// A finished run as the page keeps it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RunResult {
+    pub strategy: Option<Strategy>,
+    pub positions: Vec<[f64; 3]>,
+    pub metrics: Option<TrajectoryMetrics>,
+    pub ms: f64,
+}
+
+impl RunResult {
+    /// The run as the core's figures draw it (name and style by tracker).
+    pub fn plot_run(&self) -> Run {
+        let (name, style) = run_style(self.strategy.as_ref());
+        Run { name, style, positions: self.positions.clone() }
+    }
+}
+
+/// One row of the metrics table: run, ATE, aligned ATE, RPE (m, °), KITTI
+/// (%, °/100 m; "n/a" under 100 m of path), frames/s.
+pub fn metric_cells(name: &str, m: &TrajectoryMetrics, ms: f64) -> [String; 8] {
+    let opt = |v: Option<f64>, d: usize| v.map_or("n/a".to_string(), |v| format!("{v:.d$}"));
+    let fps = if ms > 0.0 { format!("{:.1}", m.frames as f64 * 1000.0 / ms) } else { "–".into() };
+    [
+        name.to_string(),
+        format!("{:.4}", m.ate_rmse),
+        format!("{:.4}", m.ate_rmse_aligned),
+        format!("{:.4}", m.rpe_trans_rmse),
+        format!("{:.4}", m.rpe_rot_rmse_deg),
+        opt(m.kitti_t_err_pct, 2),
+        opt(m.kitti_r_err_deg_per_100m, 3),
+        fps,
+    ]
+}
+
+/// What the pointer is over in the top view (world x, z): the nearest
+/// frame of the estimate, its position and its error against the truth.
+pub fn hover_text(est: &[[f64; 3]], truth: &[[f64; 3]], x: f64, z: f64) -> Option<String> {
+    let i = nearest_xz(est, x, z)?;
+    let p = est[i];
+    let err = truth.get(i).map(|g| ((p[0] - g[0]).powi(2) + (p[1] - g[1]).powi(2) + (p[2] - g[2]).powi(2)).sqrt());
+    let err = err.map_or(String::new(), |e| format!(" · error {e:.3} m"));
+    Some(format!("frame {i} · x={:.3} y={:.3} z={:.3} m{err}", p[0], p[1], p[2]))
+}
+
+/// The error plot's hover: frame `i` of each run, `name error` pairs.
+pub fn error_hover_text(frame: f64, runs: &[(String, Vec<f64>)]) -> Option<String> {
+    let i = frame.round();
+    if i < 0.0 {
+        return None;
+    }
+    let i = i as usize;
+    let parts: Vec<String> = runs.iter().filter_map(|(n, e)| e.get(i).map(|v| format!("{n} {v:.3} m"))).collect();
+    (!parts.is_empty()).then(|| format!("frame {i} · error {}", parts.join(", ")))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trackers_and_thresholds() {
+        assert_eq!(tracker_strategy("lk", "junk"), Ok(None));
+        assert_eq!(tracker_strategy("dt", " 200 "), Ok(Some(Strategy::Dt(200.0))));
+        assert_eq!(tracker_strategy("nn", ""), Ok(Some(Strategy::Nn(None))));
+        assert!(tracker_strategy("nndr", "").unwrap_err().contains("nndr needs a threshold"));
+        assert!(tracker_strategy("nndr", "1.5").unwrap_err().contains("outside [0, 1]"));
+        assert_eq!(tracker_strategy("dt", "x").unwrap_err(), "threshold must be a number, got 'x'");
+        assert_eq!(default_threshold("dt"), "200");
+        assert_eq!(default_threshold("nn"), "");
+        assert_eq!(default_threshold("nndr"), "0.8");
+        let names: Vec<String> = compare_runs().iter().map(|s| run_style(s.as_ref()).0).collect();
+        assert_eq!(names, ["LK", "dt 200", "nn", "nndr 0.8"]);
+    }
+
+    #[test]
+    fn table_cells_and_hover() {
+        let m = TrajectoryMetrics {
+            frames: 100,
+            ate_rmse: 1.13523,
+            ate_rmse_aligned: 0.14531,
+            rpe_trans_rmse: 0.13966,
+            rpe_rot_rmse_deg: 0.14851,
+            kitti_t_err_pct: None,
+            kitti_r_err_deg_per_100m: Some(1.23456),
+        };
+        assert_eq!(
+            metric_cells("LK", &m, 4000.0),
+            ["LK", "1.1352", "0.1453", "0.1397", "0.1485", "n/a", "1.235", "25.0"].map(String::from)
+        );
+        assert_eq!(metric_cells("LK", &m, 0.0)[7], "–");
+        let est = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.5, 0.0, 2.0]];
+        let truth = [[0.0, 0.0, 0.0], [0.0, 0.0, 1.2], [0.0, 0.0, 2.0]];
+        assert_eq!(hover_text(&est, &truth, 0.4, 1.9).unwrap(), "frame 2 · x=0.500 y=0.000 z=2.000 m · error 0.500 m");
+        assert_eq!(hover_text(&[], &truth, 0.0, 0.0), None);
+        let runs = [("LK".to_string(), vec![0.0, 0.25]), ("nn".to_string(), vec![0.0])];
+        assert_eq!(error_hover_text(0.6, &runs).unwrap(), "frame 1 · error LK 0.250 m");
+        assert_eq!(error_hover_text(-3.0, &runs), None);
+    }
+}

@@ -1,0 +1,227 @@
+//! The lab's `view_trajectory FRAME_ID`: monocular visual odometry over frames
+//! 0 … FRAME_ID (FRAME_ID + 1 frames, as the lab counts) of the demo or a
+//! MyKITTI folder, computed by the core in workers, drawn as it grows (truth
+//! solid, estimate dashed, in the palette's colours), with the trajectory error and
+//! the lab's window as a PNG to download. A menu swaps LK for the student's
+//! matcher (`vo::matched`); the metrics and the core's figures follow each run,
+//! and [`VoCompare`] runs all four trackers side by side.
+
+use super::vo_compare::VoCompare;
+use super::vo_plot::VoFigures;
+use crate::model::frameset::{run_from_zero, vo_frame_count, vo_range_label};
+use crate::model::lab::Lab;
+use crate::model::odometry::{default_threshold, tracker_strategy, RunResult, TRACKERS};
+use crate::model::plot::{percent, vo_done_text, vo_progress_text};
+use crate::platform::{blob_url, revoke};
+use crate::protocol::odometry::VoReply;
+use crate::services::loading;
+use crate::services::odometry;
+use crate::services::sift_pool;
+use leptos::prelude::*;
+use siftlab_core::render::coordinates_text;
+use siftlab_core::vo::TrajectoryMetrics;
+
+type P3 = [f64; 3];
+/// One plotted step: frame, estimate, ground truth.
+type Step = (u32, P3, Option<P3>);
+
+#[derive(Clone, Debug, PartialEq)]
+struct Done {
+    ate: f64,
+    png_url: Option<String>,
+    /// The estimated poses in KITTI's format (the CLI's `--save-poses`).
+    poses_url: Option<String>,
+    ms: f64,
+}
+
+/// How the run was computed: SIFT workers and their memory.
+fn workers_text() -> String {
+    let n = sift_pool::worker_count();
+    let peak = sift_pool::worker_memory_peak();
+    let mem = if peak > 0 { format!(", each up to {} MB of wasm memory", peak >> 20) } else { String::new() };
+    format!(
+        "SIFT on {n} worker{}{mem}, each frame once for every tracker (add ?workers=N to the address to change the count)",
+        if n == 1 { "" } else { "s" }
+    )
+}
+
+#[component]
+pub fn TrajectoryView() -> impl IntoView {
+    let lab = expect_context::<Lab>();
+    // The lab's FRAME_ID: the last frame of the run.
+    let frame_text = RwSignal::new(String::new());
+    let steps = RwSignal::new(Vec::<Step>::new());
+    let total = RwSignal::new(0u32);
+    let running = RwSignal::new(false);
+    let error = RwSignal::new(None::<String>);
+    let done = RwSignal::new(None::<Done>);
+    let frame_url = RwSignal::new(None::<String>);
+    // The tracker: "lk" (the lab's) or a strategy with its threshold.
+    let tracker = RwSignal::new("lk".to_string());
+    let threshold = RwSignal::new(String::new());
+    let strategy_run = RwSignal::new(None::<siftlab_core::matching::Strategy>);
+    let metrics = RwSignal::new(None::<TrajectoryMetrics>);
+    let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
+    // When the workers got the frames: the live rate counts from there.
+    let started_ms = StoredValue::new(0.0f64);
+    // Frames 0, 1, 2, … with no gap: the demo's 119, 120, 149, 150 are not part of it.
+    let available = move || lab.source.with(|s| run_from_zero(s.frames()));
+    Effect::new(move |_| frame_text.set(available().saturating_sub(1).to_string()));
+
+    let run = move |_| {
+        let n = match vo_frame_count(&frame_text.get_untracked(), available()) {
+            Ok(n) => n,
+            Err(e) => {
+                error.set(Some(e));
+                return;
+            }
+        };
+        let strategy = match tracker_strategy(&tracker.get_untracked(), &threshold.get_untracked()) {
+            Ok(s) => s,
+            Err(e) => {
+                error.set(Some(e));
+                return;
+            }
+        };
+        strategy_run.set(strategy);
+        metrics.set(None);
+        error.set(None);
+        if let Some(d) = done.get_untracked() {
+            revoke(d.png_url);
+            revoke(d.poses_url);
+        }
+        done.set(None);
+        steps.set(vec![]);
+        total.set(n);
+        running.set(true);
+        let source = lab.source.get_untracked();
+        leptos::task::spawn_local(async move {
+            let (fr, poses) = match loading::vo_inputs(&source, n).await {
+                Ok(x) => x,
+                Err(e) => {
+                    error.set(Some(e));
+                    running.set(false);
+                    return;
+                }
+            };
+            frames.set_value(fr.clone());
+            started_ms.set_value(crate::platform::now_ms());
+            let on_event = move |m| match m {
+                VoReply::Step { frame, position, truth, .. } => {
+                    steps.update(|s| s.push((frame, position, truth)));
+                    let url = frames.with_value(|f| f.get(frame as usize).and_then(|b| blob_url(b)));
+                    revoke(frame_url.get_untracked());
+                    frame_url.set(url);
+                }
+                VoReply::Metrics { metrics: m, .. } => metrics.set(Some(TrajectoryMetrics::from_array(&m))),
+                VoReply::Done { ate, png, ms, kitti, .. } => {
+                    done.set(Some(Done { ate, png_url: blob_url(&png), poses_url: blob_url(kitti.as_bytes()), ms }));
+                    running.set(false);
+                }
+                VoReply::Failed { message, .. } => {
+                    error.set(Some(message));
+                    running.set(false);
+                }
+            };
+            if let Err(e) = odometry::start(fr, poses, &[strategy], move |_, m| on_event(m)) {
+                error.set(Some(e));
+                running.set(false);
+            }
+        });
+    };
+    let stop = move |_| {
+        odometry::stop();
+        running.set(false);
+    };
+
+    let truth = Signal::derive(move || steps.with(|s| s.iter().filter_map(|(_, _, t)| *t).collect::<Vec<_>>()));
+    let runs = Signal::derive(move || {
+        let positions = steps.with(|s| s.iter().map(|(_, e, _)| *e).collect());
+        vec![RunResult { strategy: strategy_run.get(), positions, metrics: None, ms: 0.0 }.plot_run()]
+    });
+    let last = move || steps.with(|s| s.last().map(|(_, e, _)| *e).unwrap_or([0.0; 3]));
+    let count = Signal::derive(move || vo_frame_count(&frame_text.get(), available()));
+    let source = Signal::derive(move || lab.source.get());
+
+    view! {
+        <section class="card trajectory" aria-label="Visual odometry">
+            <h2>"8 · Visual odometry (the lab's view_trajectory)"</h2>
+            <p class="muted">
+                "The lab's monocular VO, "<code>"view_trajectory FRAME_ID"</code>", on frames 0 … FRAME_ID: SIFT keypoints of the first frame, Lucas–Kanade tracking, "
+                "essential matrix (5-point RANSAC), recoverPose, scale from the ground-truth poses. "
+                "In the figures the ground truth is a black solid line, the estimate a dashed line with markers in "
+                "the tracker's colour (the legend names each)."
+            </p>
+            <div class="control-row">
+                <label class="ctl">
+                    <span>
+                        "FRAME_ID (the last frame) "
+                        <span class="muted" data-testid="vo-range">
+                            {move || frame_text.with(|t| vo_range_label(t, available()))}
+                        </span>
+                    </span>
+                    <input type="number" min="1" class="num" data-testid="vo-frame-id"
+                        prop:value=move || frame_text.get()
+                        on:input=move |ev| frame_text.set(event_target_value(&ev))/>
+                </label>
+                <label class="ctl">
+                    <span>"tracker"</span>
+                    <select data-testid="vo-tracker" on:change=move |ev| {
+                        let v = event_target_value(&ev);
+                        threshold.set(default_threshold(&v).to_string());
+                        tracker.set(v);
+                    }>
+                        {TRACKERS.map(|t| view! { <option value=t selected=move || tracker.get() == t>{if t == "lk" { "Lucas–Kanade (the lab's)".to_string() } else { format!("SIFT matching: {t}") }}</option> })}
+                    </select>
+                </label>
+                <Show when=move || tracker.get() != "lk">
+                    <label class="ctl">
+                        <span>"threshold"</span>
+                        <input class="num" data-testid="vo-threshold" prop:value=move || threshold.get()
+                            on:input=move |ev| threshold.set(event_target_value(&ev))/>
+                    </label>
+                </Show>
+                <button class="primary" data-testid="vo-run" on:click=run prop:disabled=move || running.get() || available() < 2>
+                    "Run the odometry"
+                </button>
+                <Show when=move || running.get()>
+                    <button on:click=stop>"Stop"</button>
+                </Show>
+            </div>
+            {move || error.get().map(|e| view! { <p class="error" data-testid="vo-error" role="alert">{e}</p> })}
+            <Show when=move || running.get() || !steps.with(|s| s.is_empty())>
+                <div class="vo-progress" data-testid="vo-progress">
+                    <div class="pbar"><div class="pbar-fill" style:width=move || percent(steps.with(|s| s.len()), total.get())></div></div>
+                    <span class="muted">{move || {
+                        // The rate so far, updated with each step while the run lasts
+                        // (then the run's own figure, with the error, replaces it).
+                        let elapsed = crate::platform::now_ms() - started_ms.get_value();
+                        vo_progress_text(steps.with(|s| s.len()), total.get(), running.get(), elapsed)
+                    }}</span>
+                </div>
+                <div class="vo-views">
+                    <div class="vo-plot">
+                        <VoFigures truth=truth runs=runs name="vo"/>
+                        <p class="mono small" data-testid="vo-coordinates">{move || coordinates_text(&last())}</p>
+                    </div>
+                    <div class="vo-frame">
+                        {move || frame_url.get().map(|u| view! { <img src=u alt="the current camera frame" class="vo-img"/> })}
+                    </div>
+                </div>
+            </Show>
+            {move || done.get().map(|d| view! {
+                <p>
+                    "Trajectory error (RMSE, no alignment, GT scale): "
+                    <strong data-testid="vo-ate">{format!("{:.4} m", d.ate)}</strong>
+                    {vo_done_text(steps.with(|s| s.len()), d.ms)}
+                    {d.png_url.map(|u| view! { " · " <a href=u download="trajectory.png" data-testid="vo-download">"download trajectory.png"</a> })}
+                    {d.poses_url.map(|u| view! { " · " <a href=u download="poses.txt" data-testid="vo-poses"
+                        title="the estimated poses, 12 numbers a line (KITTI's format, as view_trajectory --save-poses writes them)">"poses.txt"</a> })}
+                </p>
+                <p class="muted small" data-testid="vo-workers">{workers_text()}</p>
+            })}
+            {move || metrics.get().map(|m| view! { <p class="small" data-testid="vo-metrics">{m.summary()}</p> })}
+            <VoCompare source=source count=count/>
+        </section>
+    }
+}

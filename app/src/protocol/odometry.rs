@@ -1,0 +1,182 @@
+//! An odometry tracker's messages: the run's start, then one frame at a time
+//! (the image, its keypoints, or a matcher-driven run's features); one step
+//! back per frame, then the metrics and the end of the run.
+
+use super::codec::*;
+use js_sys::{Object, Uint8Array};
+use siftlab_core::sift::Features;
+use wasm_bindgen::{JsCast, JsValue};
+
+/// Page → tracking worker.
+#[derive(Debug, Clone, PartialEq)]
+pub enum VoRequest {
+    /// Starts the lab's loop (Lucas–Kanade) over `total` frames, fed one
+    /// [`VoRequest::Frame`] at a time.
+    Start { id: u32, total: u32, poses: String },
+    /// Starts the loop driven by the student's matcher (`vo::matched`)
+    /// instead of LK; its frames come as [`VoRequest::Features`] (or as
+    /// `Frame`s, on which the worker runs SIFT itself).
+    MatchedStart { id: u32, total: u32, poses: String, algo: String, threshold: Option<f64> },
+    /// The run's next frame, with its keypoints if the page's SIFT workers
+    /// computed them (`None`: the tracker detects itself where the loop
+    /// re-detects; frame 1 never does).
+    Frame { id: u32, frame: u32, bytes: Vec<u8>, points: Option<Vec<[f32; 2]>> },
+    /// A matcher-driven run's next frame as its SIFT features, computed once
+    /// by the page's SIFT workers and shared by every tracker of the page.
+    Features { id: u32, frame: u32, features: Features },
+}
+
+/// Tracking worker → page.
+#[derive(Debug, Clone, PartialEq)]
+pub enum VoReply {
+    /// One frame done: the estimated and true camera positions.
+    Step {
+        id: u32,
+        frame: u32,
+        total: u32,
+        position: [f64; 3],
+        truth: Option<[f64; 3]>,
+        tracked: u32,
+        redetected: bool,
+    },
+    /// Sent just before `Done`: the run's metrics (`TrajectoryMetrics::to_array`,
+    /// KITTI figures NaN when undefined).
+    Metrics { id: u32, metrics: [f64; 7] },
+    /// The run is over: trajectory error (RMSE, GT scale, no alignment), the
+    /// lab's trajectory window as PNG (the core's renderer, as the CLI writes
+    /// it), and the estimated poses in KITTI's format (as `--save-poses` writes them).
+    Done { id: u32, ate: f64, png: Vec<u8>, ms: f64, kitti: String },
+    /// A user-facing message; the run is over.
+    Failed { id: u32, message: String },
+}
+
+impl VoRequest {
+    pub fn to_js(&self) -> JsValue {
+        let o = Object::new();
+        match self {
+            VoRequest::Start { id, total, poses } => {
+                set(&o, "type", &"voStart".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "total", &(*total).into());
+                set(&o, "poses", &poses.as_str().into());
+            }
+            VoRequest::MatchedStart { id, total, poses, algo, threshold } => {
+                set(&o, "type", &"voMatchedStart".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "total", &(*total).into());
+                set(&o, "poses", &poses.as_str().into());
+                set(&o, "algo", &algo.as_str().into());
+                set(&o, "threshold", &threshold.map_or(JsValue::NULL, JsValue::from));
+            }
+            VoRequest::Frame { id, frame, bytes, points } => {
+                set(&o, "type", &"voFrame".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "frame", &(*frame).into());
+                set(&o, "bytes", &Uint8Array::from(bytes.as_slice()).into());
+                set(&o, "points", &points.as_deref().map(points_js).unwrap_or(JsValue::NULL));
+            }
+            VoRequest::Features { id, frame, features } => {
+                set(&o, "type", &"voFeatures".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "frame", &(*frame).into());
+                set_features(&o, "", features);
+            }
+        }
+        o.into()
+    }
+
+    /// `None` when `v` is not an odometry request.
+    pub fn from_js(v: &JsValue) -> Option<Result<Self, String>> {
+        let parse = |k: &str| -> Result<Self, String> {
+            let id = get_u32(v, "id")?;
+            Ok(match k {
+                "voStart" => VoRequest::Start { id, total: get_u32(v, "total")?, poses: get_str(v, "poses")? },
+                "voMatchedStart" => VoRequest::MatchedStart {
+                    id,
+                    total: get_u32(v, "total")?,
+                    poses: get_str(v, "poses")?,
+                    algo: get_str(v, "algo")?,
+                    threshold: get(v, "threshold")?.as_f64(),
+                },
+                "voFrame" => VoRequest::Frame {
+                    id,
+                    frame: get_u32(v, "frame")?,
+                    bytes: get_bytes(v, "bytes")?,
+                    points: get_points(v, "points")?,
+                },
+                _ => VoRequest::Features { id, frame: get_u32(v, "frame")?, features: get_features(v, "")? },
+            })
+        };
+        let k = kind(v).ok()?;
+        matches!(k.as_str(), "voStart" | "voMatchedStart" | "voFrame" | "voFeatures").then(|| parse(&k))
+    }
+}
+
+impl VoReply {
+    pub fn to_js(&self) -> JsValue {
+        let o = Object::new();
+        match self {
+            VoReply::Step { id, frame, total, position, truth, tracked, redetected } => {
+                set(&o, "type", &"voStep".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "frame", &(*frame).into());
+                set(&o, "total", &(*total).into());
+                set(&o, "position", &vec3(position));
+                set(&o, "truth", &truth.as_ref().map(vec3).unwrap_or(JsValue::NULL));
+                set(&o, "tracked", &(*tracked).into());
+                set(&o, "redetected", &(*redetected).into());
+            }
+            VoReply::Metrics { id, metrics } => {
+                set(&o, "type", &"voMetrics".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "metrics", &js_sys::Float64Array::from(metrics.as_slice()).into());
+            }
+            VoReply::Done { id, ate, png, ms, kitti } => {
+                set(&o, "type", &"voDone".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "ate", &(*ate).into());
+                set(&o, "png", &Uint8Array::from(png.as_slice()).into());
+                set(&o, "ms", &(*ms).into());
+                set(&o, "kitti", &kitti.as_str().into());
+            }
+            VoReply::Failed { id, message } => {
+                set(&o, "type", &"failed".into());
+                set(&o, "id", &(*id).into());
+                set(&o, "message", &message.as_str().into());
+            }
+        }
+        o.into()
+    }
+
+    pub fn from_js(v: &JsValue) -> Result<Self, String> {
+        match kind(v)?.as_str() {
+            "voStep" => Ok(VoReply::Step {
+                id: get_u32(v, "id")?,
+                frame: get_u32(v, "frame")?,
+                total: get_u32(v, "total")?,
+                position: get_vec3(v, "position")?.ok_or("voStep without a position")?,
+                truth: get_vec3(v, "truth")?,
+                tracked: get_u32(v, "tracked")?,
+                redetected: get(v, "redetected")?.as_bool().unwrap_or(false),
+            }),
+            "voMetrics" => {
+                let a = get(v, "metrics")?
+                    .dyn_into::<js_sys::Float64Array>()
+                    .map_err(|_| "message field metrics is not a Float64Array".to_string())?
+                    .to_vec();
+                let metrics: [f64; 7] =
+                    a.try_into().map_err(|a: Vec<f64>| format!("voMetrics has {} numbers, not 7", a.len()))?;
+                Ok(VoReply::Metrics { id: get_u32(v, "id")?, metrics })
+            }
+            "voDone" => Ok(VoReply::Done {
+                id: get_u32(v, "id")?,
+                ate: get_f64(v, "ate")?,
+                png: get_bytes(v, "png")?,
+                ms: get_f64(v, "ms")?,
+                kitti: get_str(v, "kitti")?,
+            }),
+            "failed" => Ok(VoReply::Failed { id: get_u32(v, "id")?, message: get_str(v, "message")? }),
+            other => Err(format!("not a tracking worker's reply: {other:?}")),
+        }
+    }
+}

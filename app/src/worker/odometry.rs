@@ -1,0 +1,155 @@
+//! A tracking worker's job: the lab's `view_trajectory` loop (or the loop
+//! driven by a strategy's matches), one frame per request, in frame order.
+
+use crate::platform::now_ms;
+use crate::protocol::odometry::{VoReply, VoRequest};
+use siftlab_core::GrayImage;
+
+/// Handles one request of the worker's odometry run, posting its steps, its
+/// metrics and its end, or why it failed (which ends the run).
+pub fn handle(req: VoRequest, post: &dyn Fn(VoReply)) {
+    match req {
+        VoRequest::Start { id, total, poses } => {
+            let started = VoSession::start(id, total as usize, &poses);
+            let failed = started.as_ref().err().cloned();
+            SESSION.with(|s| *s.borrow_mut() = started.ok());
+            if let Some(message) = failed {
+                post(VoReply::Failed { id, message });
+            }
+        }
+        VoRequest::MatchedStart { id, total, poses, algo, threshold } => {
+            let started = siftlab_core::matching::Strategy::parse(&algo, threshold)
+                .map_err(|e| e.to_string())
+                .and_then(|s| VoSession::start(id, total as usize, &poses).map(|v| v.with_matcher(s)))
+                .and_then(|r| r);
+            let failed = started.as_ref().err().cloned();
+            SESSION.with(|s| *s.borrow_mut() = started.ok());
+            if let Some(message) = failed {
+                post(VoReply::Failed { id, message });
+            }
+        }
+        VoRequest::Frame { id, frame, bytes, points } => {
+            on_session(id, post, |session| session.frame(frame as usize, Input::Image(&bytes, points), post))
+        }
+        VoRequest::Features { id, frame, features } => {
+            on_session(id, post, |session| session.frame(frame as usize, Input::Features(features), post))
+        }
+    }
+}
+
+/// Runs `f` on the worker's odometry session `id`; an error ends the session.
+fn on_session(id: u32, post: &dyn Fn(VoReply), f: impl FnOnce(&mut VoSession) -> Result<(), String>) {
+    let r = SESSION.with(|s| match s.borrow_mut().as_mut() {
+        Some(session) if session.id == id => f(session),
+        _ => Err("no odometry run is going on (it was stopped or failed)".into()),
+    });
+    if let Err(message) = r {
+        SESSION.with(|s| *s.borrow_mut() = None);
+        post(VoReply::Failed { id, message });
+    }
+}
+
+/// What a tracking worker gets for its next frame: the image (and the
+/// keypoints a SIFT worker found in it, if any), or a matcher-driven run's
+/// SIFT features.
+enum Input<'a> {
+    Image(&'a [u8], Option<Vec<[f32; 2]>>),
+    Features(siftlab_core::sift::Features),
+}
+
+thread_local! {
+    /// The odometry run this worker tracks for, between `VoFrame` messages.
+    static SESSION: std::cell::RefCell<Option<VoSession>> = const { std::cell::RefCell::new(None) };
+}
+
+/// The lab's `view_trajectory` loop, a frame at a time: the odometry state,
+/// the ground truth and the positions so far.
+struct VoSession {
+    id: u32,
+    total: usize,
+    poses: Vec<siftlab_core::dataset::PoseRow>,
+    odo: siftlab_core::vo::Odometry,
+    /// Set for a run driven by the student's matcher (`odo` then unused).
+    matched: Option<siftlab_core::vo::MatchedOdometry>,
+    /// Estimated poses as KITTI rows, for the metrics.
+    rows: Vec<siftlab_core::dataset::PoseRow>,
+    est: Vec<[f64; 3]>,
+    truth: Vec<[f64; 3]>,
+    t0: f64,
+}
+
+impl VoSession {
+    /// Checks the poses before any frame is read, as the CLI does.
+    fn start(id: u32, total: usize, poses: &str) -> Result<Self, String> {
+        use siftlab_core::dataset::parse_poses;
+        use siftlab_core::vo::{Camera, Odometry};
+        let t0 = now_ms();
+        let poses = parse_poses(poses).map_err(|e| format!("poses/00.txt: {e}"))?;
+        if poses.len() < total {
+            return Err(format!(
+                "poses/00.txt has {} poses but {} frames were asked for: the lab takes the scale from the ground truth of every frame",
+                poses.len(),
+                total
+            ));
+        }
+        let odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
+        Ok(VoSession { id, total, poses, odo, matched: None, rows: Vec::new(), est: Vec::new(), truth: Vec::new(), t0 })
+    }
+
+    /// The same session tracking with `strategy`'s matches instead of LK.
+    fn with_matcher(mut self, strategy: siftlab_core::matching::Strategy) -> Result<Self, String> {
+        use siftlab_core::vo::{Camera, MatchedOdometry};
+        self.matched = Some(MatchedOdometry::new(Camera::default(), strategy).map_err(|e| e.to_string())?);
+        Ok(self)
+    }
+
+    /// Frame `i` (the next one): one step, posted; after the last, the
+    /// trajectory error and the lab's window as PNG. `points`: the frame's
+    /// keypoints if detected elsewhere (else detected here when the loop
+    /// re-detects).
+    fn frame(&mut self, i: usize, input: Input, post: &dyn Fn(VoReply)) -> Result<(), String> {
+        use siftlab_core::dataset::position;
+        use siftlab_core::render::{encode_png, trajectory_window, TrajectoryStyle};
+        use siftlab_core::vo::ate_rmse;
+        if i != self.est.len() || i >= self.total {
+            return Err(format!("frame {i} arrived out of order (expected frame {})", self.est.len()));
+        }
+        let decode = |bytes: &[u8]| GrayImage::decode(bytes).map_err(|e| format!("frame {i}: {e}"));
+        let gt = self.poses.get(i);
+        let step = match (self.matched.as_mut(), input) {
+            (Some(m), Input::Features(f)) => m.step_features(f, gt),
+            (Some(m), Input::Image(bytes, _)) => m.step(&decode(bytes)?, gt),
+            (None, Input::Image(bytes, points)) => self.odo.step_detected(&decode(bytes)?, gt, points),
+            (None, Input::Features(_)) => {
+                return Err(format!("frame {i}: the Lucas–Kanade loop needs the image, not only its features"))
+            }
+        }
+        .map_err(|e| e.to_string())?;
+        self.rows.push(siftlab_core::vo::pose_row(&step.rotation, &step.position));
+        let gt = step.gt_position.or_else(|| self.poses.get(i).map(position));
+        self.est.push(step.position);
+        if let Some(g) = gt {
+            self.truth.push(g);
+        }
+        post(VoReply::Step {
+            id: self.id,
+            frame: i as u32,
+            total: self.total as u32,
+            position: step.position,
+            truth: gt,
+            tracked: step.tracked as u32,
+            redetected: step.redetected,
+        });
+        if i + 1 == self.total {
+            let ate = ate_rmse(&self.est, &self.truth).map_err(|e| e.to_string())?;
+            let style = TrajectoryStyle::default();
+            let png = encode_png(&trajectory_window(&self.truth, &self.est, &style)).map_err(|e| e.to_string())?;
+            let gt = &self.poses[..self.rows.len()];
+            let metrics = siftlab_core::vo::evaluate(&self.rows, gt).map_err(|e| e.to_string())?;
+            post(VoReply::Metrics { id: self.id, metrics: metrics.to_array() });
+            let kitti = siftlab_core::vo::kitti_rows_text(&self.rows);
+            post(VoReply::Done { id: self.id, ate, png, ms: now_ms() - self.t0, kitti });
+        }
+        Ok(())
+    }
+}
