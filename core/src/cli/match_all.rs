@@ -4,7 +4,8 @@
 //! `matches.png` in the current folder, as the lab's view commands write
 //! theirs.
 
-use super::{expand_home, load_frame, parse_threshold, sift_params, Cli};
+use super::args::{Cli, MatchAllArgs};
+use super::common::{expand_home, load_frame, parse_threshold, sift_params};
 use crate::camera::Camera;
 use crate::dataset::{parse_poses, POSES_FILE};
 use crate::error::{Error, Result};
@@ -13,28 +14,8 @@ use crate::matching::epipolar::{fundamental, judge, Verdicts};
 use crate::matching::{match_all, DMatch, Strategy};
 use crate::render::{encode_png, whole_frame};
 use crate::sift::detect_and_compute;
-use clap::Args;
 use std::io::Write;
 use std::path::Path;
-
-#[derive(Args, Debug)]
-pub struct MatchAllArgs {
-    /// Matching strategy.
-    #[arg(short = 'a', long = "algorithm", value_parser = ["dt", "nn", "nndr"])]
-    pub algo: String,
-    /// Threshold: a distance for dt/nn, a ratio in [0, 1] for nndr.
-    #[arg(short = 't', long = "threshold", allow_negative_numbers = true)]
-    pub threshold: Option<String>,
-    /// A match is correct when its Sampson distance to the true epipolar geometry is at most this (pixels).
-    #[arg(long = "epipolar-px", default_value_t = 2.0, allow_negative_numbers = true)]
-    pub epipolar_px: f64,
-    /// Print the counts as JSON.
-    #[arg(long)]
-    pub json: bool,
-    /// The current frame (>= 1); frame FRAME_ID-1 is the previous one.
-    #[arg(allow_negative_numbers = true)]
-    pub frame_id: String,
-}
 
 pub fn run(cli: &Cli, a: &MatchAllArgs) -> Result<()> {
     let strategy = Strategy::parse(&a.algo, parse_threshold(&a.threshold)?)?;

@@ -3,7 +3,7 @@
 //! after writing the image (the lab's methods return nothing, so it prints
 //! no `ret count`).
 
-use super::MatchContext;
+use super::common::MatchContext;
 use crate::error::{Error, Result};
 use crate::matching::MatchInfo;
 use crate::render::{encode_png, info, matches, RgbImage};

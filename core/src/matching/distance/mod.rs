@@ -3,7 +3,7 @@
 //! 0..255 differences is an integer below 2^24, so the float sum is exact and
 //! equals this integer sum; the distance is its correctly rounded f32 sqrt.
 //!
-//! This module holds the plain sum and the dispatch. The row kernels beside
+//! `scalar` holds the plain sum; this module the dispatch. The row kernels beside
 //! it (`x86`: AVX-512 BW with and without VNNI, AVX2; `wasm`: simd128)
 //! compute that same integer sum with SIMD: bytes are
 //! zero-extended to i16, subtracted (|d| <= 255), and squared-and-paired by a
@@ -15,27 +15,15 @@
 //! share one reduction and one 4-wide sqrt; a remainder of < 4 rows takes the
 //! scalar path.
 
+mod scalar;
 #[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
 mod wasm;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-/// The exact sum of squared differences of two descriptors.
-#[inline(always)]
-pub fn distance_sq(a: &[u8; 128], b: &[u8; 128]) -> u32 {
-    let mut s = 0u32;
-    for (&x, &y) in a.iter().zip(b.iter()) {
-        let d = x as i32 - y as i32;
-        s += (d * d) as u32;
-    }
-    s
-}
-
-/// `sqrtf` of the exact sum, as BFMatcher reports it.
-#[inline(always)]
-pub fn distance(a: &[u8; 128], b: &[u8; 128]) -> f32 {
-    (distance_sq(a, b) as f32).sqrt()
-}
+#[cfg(test)]
+pub use scalar::{distance, distance_sq};
+use scalar::{norm_sq, row_generic};
 
 /// Distances from one query descriptor to every train descriptor.
 pub fn distance_row(q: &[u8; 128], train: &[[u8; 128]], out: &mut Vec<f32>) {
@@ -76,13 +64,6 @@ pub fn distance_row_into(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
     row_generic(q, train, out)
 }
 
-/// The portable kernel (auto-vectorised where the target allows).
-fn row_generic(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
-    for (o, t) in out.iter_mut().zip(train) {
-        *o = distance(q, t);
-    }
-}
-
 /// Train descriptors with their squared norms |t|^2, computed once for all
 /// the queries of a [`distance_rows`] batch.
 pub struct TrainSet<'a> {
@@ -101,11 +82,6 @@ impl<'a> TrainSet<'a> {
     pub fn len(&self) -> usize {
         self.rows.len()
     }
-}
-
-/// |t|^2 = the sum of squares of the bytes, at most 128 * 255^2.
-fn norm_sq(t: &[u8; 128]) -> i32 {
-    t.iter().map(|&x| x as i32 * x as i32).sum()
 }
 
 /// Distances from each of several queries to every train descriptor, as

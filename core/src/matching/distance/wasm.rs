@@ -47,5 +47,5 @@ pub(super) fn row_simd128(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32]) {
         o[2] = f32x4_extract_lane::<2>(r);
         o[3] = f32x4_extract_lane::<3>(r);
     }
-    super::row_generic(q, t4.remainder(), o4.into_remainder());
+    super::scalar::row_generic(q, t4.remainder(), o4.into_remainder());
 }

@@ -44,7 +44,7 @@ fn by_fours(q: &[u8; 128], train: &[[u8; 128]], out: &mut [f32], sums4: impl Fn(
         // SAFETY: `o` is a chunk of 4 f32; an unaligned store.
         unsafe { _mm_storeu_ps(o.as_mut_ptr(), _mm_sqrt_ps(_mm_cvtepi32_ps(s))) };
     }
-    super::row_generic(q, t4.remainder(), o4.into_remainder());
+    super::scalar::row_generic(q, t4.remainder(), o4.into_remainder());
 }
 
 /// One AVX-512 row kernel per way of accumulating `d * d` pairs: the
@@ -143,7 +143,7 @@ macro_rules! avx512_rows2_kernel {
                 [e0, o0, e1, o1]
             };
             let qv = [split(q[0]), split(q[1])];
-            let qn = [_mm_set1_epi32(super::norm_sq(q[0])), _mm_set1_epi32(super::norm_sq(q[1]))];
+            let qn = [_mm_set1_epi32(super::scalar::norm_sq(q[0])), _mm_set1_epi32(super::scalar::norm_sq(q[1]))];
             let mut j = 0;
             while j + 4 <= n {
                 let tv = [split(&train[j]), split(&train[j + 1]), split(&train[j + 2]), split(&train[j + 3])];
@@ -166,7 +166,7 @@ macro_rules! avx512_rows2_kernel {
                 j += 4;
             }
             for (qk, o) in out.into_iter().enumerate() {
-                super::row_generic(q[qk], &train[j..n], &mut o[j..n]);
+                super::scalar::row_generic(q[qk], &train[j..n], &mut o[j..n]);
             }
         }
     };

@@ -9,8 +9,11 @@
 
 use crate::rng::CvRng;
 
+mod sort;
 #[cfg(target_arch = "x86_64")]
 mod x86;
+
+use sort::sort_descending;
 
 /// Result of [`svd`]: `w` descending, `u` (row-major, one column per singular value) and `vt`
 /// (vrows×n, row-major).
@@ -159,26 +162,6 @@ fn jacobi_impl(at: &mut [f64], m: usize, n: usize, n1: usize, w: &mut [f64], vt:
         let s = if sd > minval { 1.0 / sd } else { 0.0 };
         for k in 0..m {
             at[i * m + k] *= s;
-        }
-    }
-}
-
-/// JacobiSVD's selection sort of the singular values, descending (§VO-3.5
-/// step 4): only a strictly greater value moves the pick, so the first of
-/// equal maxima wins. `swap(i, j)` moves what goes with values i and j.
-#[inline(always)]
-fn sort_descending(w: &mut [f64], mut swap: impl FnMut(usize, usize)) {
-    let n = w.len();
-    for i in 0..n.saturating_sub(1) {
-        let mut j = i;
-        for k in i + 1..n {
-            if w[j] < w[k] {
-                j = k;
-            }
-        }
-        if i != j {
-            w.swap(i, j);
-            swap(i, j);
         }
     }
 }

@@ -210,7 +210,7 @@ pub(super) fn null_vectors_avx2(ms: &[[[f64; 4]; 4]; 4]) -> [[f64; 4]; 4] {
     std::array::from_fn(|l| {
         let mut w = [sv[0][l], sv[1][l], sv[2][l], sv[3][l]];
         let mut row = [0, 1, 2, 3];
-        super::sort_descending(&mut w, |i, j| row.swap(i, j));
+        super::sort::sort_descending(&mut w, |i, j| row.swap(i, j));
         std::array::from_fn(|k| vts[row[3]][k][l])
     })
 }

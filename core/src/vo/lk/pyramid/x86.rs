@@ -2,7 +2,7 @@
 //! time, and both passes and the Scharr derivatives compiled for AVX2. The
 //! same integers as the portable code beside it.
 
-use super::{Deriv, Level};
+use super::plain::{pyr_down_columns, pyr_down_row_edges, Deriv, Level};
 use std::arch::x86_64::*;
 
 /// [`super::pyr_down`] with AVX2: each row's interior columns sixteen at
@@ -20,8 +20,8 @@ pub(super) fn pyr_down_avx2(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, 
     for y in 0..h {
         let row = &src[y * w..(y + 1) * w];
         let out = &mut hrow[y * dw..(y + 1) * dw];
-        super::pyr_down_row_edges(row, out, 0..1);
-        super::pyr_down_row_edges(row, out, last + 1..dw);
+        pyr_down_row_edges(row, out, 0..1);
+        pyr_down_row_edges(row, out, last + 1..dw);
         // Blocks of 16 columns from 1; the last block ends at `last`
         // and overlaps the one before (recomputing the same sums).
         let mut x = 1;
@@ -55,7 +55,7 @@ pub(super) fn pyr_down_avx2(src: &[u8], w: usize, h: usize) -> (Vec<u8>, usize, 
             x += 16;
         }
     }
-    super::pyr_down_columns(&hrow, dw, h)
+    pyr_down_columns(&hrow, dw, h)
 }
 
 /// [`Deriv::compute`] compiled for AVX2, so that its 16-bit loops run

@@ -1,0 +1,131 @@
+//! The `siftlab` command line's arguments (clap): the lab's `run_odometry.py`
+//! commands and siftlab's own.
+
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(name = "siftlab", version, about = "The COMP24011 feature-matching lab (OpenCV 4.8 SIFT) in Rust")]
+pub struct Cli {
+    /// The MyKITTI dataset folder (gray/00/image_0/NNNNNN.png, poses/00.txt).
+    #[arg(short = 'd', long = "dataset", default_value = "~/MyKITTI")]
+    pub dataset: String,
+    /// SIMD width OpenCV's SIFT ran with on the reference machine (8 = AVX2,
+    /// 16 = AVX-512); default: what OpenCV would use on this CPU.
+    #[arg(long = "opencv-lanes", value_parser = ["8", "16"], global = true)]
+    pub opencv_lanes: Option<String>,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Print matching_info for one feature of frame FRAME_ID-1 matched into FRAME_ID.
+    #[command(name = "get_info")]
+    GetInfo(MatchArgs),
+    /// Write opencv_visual.png: both frames, lines from the feature to its matches.
+    #[command(name = "view_feature")]
+    ViewFeature(MatchArgs),
+    /// Write custom_visual.png: opencv_visual.png above the frames with matching_info circles.
+    #[command(name = "view_info")]
+    ViewInfo(MatchArgs),
+    /// Run the lab's monocular visual odometry and write trajectory.png.
+    #[command(name = "view_trajectory")]
+    ViewTrajectory(TrajectoryArgs),
+    /// Run SIFT on one image: "N keypoints in T ms", or everything as JSON.
+    Sift(SiftArgs),
+    /// SIFT's funnel on one image: points per stage, drops per reason; --out writes the pyramid.
+    Anatomy(AnatomyArgs),
+    /// Every match of frame FRAME_ID-1 into FRAME_ID, judged by the true geometry; writes matches.png.
+    #[command(name = "match_all")]
+    MatchAll(MatchAllArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct AnatomyArgs {
+    /// A PNG or JPEG image.
+    pub image: PathBuf,
+    /// Print the stages as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write every Gaussian and DoG level into this folder as PNG.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct MatchArgs {
+    /// Matching strategy.
+    #[arg(short = 'a', long = "algorithm", value_parser = ["dt", "nn", "nndr"])]
+    pub algo: String,
+    /// Threshold: a distance for dt/nn, a ratio in [0, 1] for nndr.
+    #[arg(short = 't', long = "threshold", allow_negative_numbers = true)]
+    pub threshold: Option<String>,
+    /// The current frame (>= 1); frame FRAME_ID-1 is the previous one.
+    #[arg(allow_negative_numbers = true)]
+    pub frame_id: String,
+    /// The feature (keypoint index) of the previous frame.
+    #[arg(allow_negative_numbers = true)]
+    pub feature_id: String,
+}
+
+#[derive(Args, Debug)]
+pub struct TrajectoryArgs {
+    /// The last frame: frames 0 to FRAME_ID inclusive, as the lab counts
+    /// (default: every frame of the dataset).
+    pub frame_id: Option<String>,
+    /// Also write the estimated poses in KITTI format (12 numbers a line).
+    #[arg(long = "save-poses")]
+    pub save_poses: Option<PathBuf>,
+    /// Where to write the plot.
+    #[arg(long = "output", default_value = "trajectory.png")]
+    pub output: PathBuf,
+    /// Track with the student's matcher (SIFT matching of consecutive frames)
+    /// instead of Lucas-Kanade.
+    #[arg(short = 'a', long = "algorithm", value_parser = ["dt", "nn", "nndr"])]
+    pub algo: Option<String>,
+    /// The matcher's threshold: a distance for dt/nn, a ratio in [0, 1] for nndr.
+    #[arg(short = 't', long = "threshold", requires = "algo", allow_negative_numbers = true)]
+    pub threshold: Option<String>,
+    /// Also write the estimated poses in TUM format (for evo): i/10 x y z qx qy qz qw.
+    #[arg(long = "save-poses-tum")]
+    pub save_poses_tum: Option<PathBuf>,
+    /// Write ATE (raw and aligned), RPE and the KITTI metric as JSON.
+    #[arg(long = "metrics")]
+    pub metrics: Option<PathBuf>,
+    /// Write the trajectory and error plot with axes (.png or .svg).
+    #[arg(long = "plot")]
+    pub plot: Option<PathBuf>,
+}
+
+#[derive(Args, Debug)]
+pub struct SiftArgs {
+    /// A PNG or JPEG image.
+    pub image: PathBuf,
+    /// Print keypoints and descriptors as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Time detect+compute this many times and report the best and the mean
+    /// (for benchmarks: tests/scripts/bench_interleaved.py).
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub repeat: u32,
+}
+
+#[derive(Args, Debug)]
+pub struct MatchAllArgs {
+    /// Matching strategy.
+    #[arg(short = 'a', long = "algorithm", value_parser = ["dt", "nn", "nndr"])]
+    pub algo: String,
+    /// Threshold: a distance for dt/nn, a ratio in [0, 1] for nndr.
+    #[arg(short = 't', long = "threshold", allow_negative_numbers = true)]
+    pub threshold: Option<String>,
+    /// A match is correct when its Sampson distance to the true epipolar geometry is at most this (pixels).
+    #[arg(long = "epipolar-px", default_value_t = 2.0, allow_negative_numbers = true)]
+    pub epipolar_px: f64,
+    /// Print the counts as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// The current frame (>= 1); frame FRAME_ID-1 is the previous one.
+    #[arg(allow_negative_numbers = true)]
+    pub frame_id: String,
+}
