@@ -13,11 +13,12 @@ use super::keypoint::KeyPoint;
 use super::num::{floor, fma, gradient_samples, rne, FLT_EPSILON};
 use super::params::SiftParams;
 
+mod layout;
 mod vector;
 
-// §SIFT-1: 4×4 cells of 8 bins, window factor 3, clip at 0.2, scale 512.
-pub(super) const D: usize = 4; // SIFT_DESCR_WIDTH
-pub(super) const N: usize = 8; // SIFT_DESCR_HIST_BINS
+use layout::{cell_offsets, Rows, Samples, BINS_PER_DEG, D, HIST_LEN, N};
+
+// §SIFT-1: window factor 3, clip at 0.2, scale 512 (the 4×4 cells of 8 bins: `layout`).
 const SCL_FCTR: f32 = 3.0;
 const MAG_THR: f32 = 0.2;
 const INT_DESCR_FCTR: f32 = 512.0;
@@ -100,37 +101,6 @@ fn calc_descriptor(img: &Plane, ptx: f32, pty: f32, ori: f32, scl: f32, lanes: u
         }
     }
     normalize(&mut raw, lanes)
-}
-
-pub(super) const BINS_PER_DEG: f32 = N as f32 / 360.0;
-pub(super) const HIST_LEN: usize = (D + 2) * (D + 2) * (N + 2);
-
-/// The gradient samples inside the descriptor window, in OpenCV's order
-/// (row by row, left to right): pixel differences, the Gaussian weight's
-/// exponent and the (row, column) bin coordinates.
-#[derive(Default)]
-pub(super) struct Samples {
-    pub(super) dx: Vec<f32>,
-    pub(super) dy: Vec<f32>,
-    pub(super) w: Vec<f32>,
-    pub(super) rbin: Vec<f32>,
-    pub(super) cbin: Vec<f32>,
-}
-
-/// Per-sample inputs of the histogram loop.
-pub(super) struct Rows<'a> {
-    pub(super) rbin: &'a [f32],
-    pub(super) cbin: &'a [f32],
-    pub(super) ori: &'a [f32],
-    pub(super) mag: &'a [f32],
-    pub(super) wt: &'a [f32],
-}
-
-/// Offsets of the (r, c) = 00, 01, 10, 11 cells' "0" orientation bin.
-#[inline(always)]
-pub(super) fn cell_offsets() -> [usize; 4] {
-    let n2 = N + 2;
-    [0, n2, (D + 2) * n2, (D + 2) * n2 + n2]
 }
 
 /// Histogram index of sample k's (r0, c0, o0) bin, the four cell weights

@@ -6,7 +6,7 @@
 //! rounds every product and difference).
 
 use super::super::lanes::{Kernel, Lanes};
-use super::{cell_offsets, Rows, Samples, BINS_PER_DEG, D, HIST_LEN, N};
+use super::layout::{cell_offsets, Rows, Samples, BINS_PER_DEG, D, HIST_LEN, N};
 
 /// Lane numbers, for the column index of each lane.
 static LANE: [f32; 16] = [0., 1., 2., 3., 4., 5., 6., 7., 8., 9., 10., 11., 12., 13., 14., 15.];

@@ -18,8 +18,8 @@ mod vector;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-/// `SIFT_IMG_BORDER`: no extremum within 5 pixels of the border (§SIFT-1).
-pub const IMG_BORDER: usize = 5;
+pub use refine::IMG_BORDER;
+use vector::ColumnExtremes;
 
 /// Finds the extrema of octave `o`, rows `[r0, r1)` of its DoG layers
 /// 1..=nl, and hands each refined one to `sink` (§SIFT-6: the scan order does
@@ -189,13 +189,6 @@ fn row_extrema_generic(rows: &[&[f32]; 9], thr: f32, cols: std::ops::Range<usize
             out.push(c);
         }
     }
-}
-
-/// Scratch rows of the separable test (per-column maximum and minimum).
-#[derive(Default)]
-struct ColumnExtremes {
-    max: Vec<f32>,
-    min: Vec<f32>,
 }
 
 /// The 26-neighbour test of one scan row: vectors where the target has

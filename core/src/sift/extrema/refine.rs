@@ -6,8 +6,10 @@ use super::super::image::Plane;
 use super::super::keypoint::{KeyPoint, Refined};
 use super::super::num::{fma, pow2f, rne, rne64};
 use super::super::params::SiftParams;
-use super::IMG_BORDER;
 use crate::sift::observer::Rejection;
+
+/// `SIFT_IMG_BORDER`: no extremum within 5 pixels of the border (§SIFT-1).
+pub const IMG_BORDER: usize = 5;
 
 // §SIFT-1: at most five refinement steps; the image and derivative scales.
 const MAX_INTERP_STEPS: usize = 5;

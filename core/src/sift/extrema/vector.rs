@@ -15,8 +15,14 @@
 //! of a view_trajectory profile; CPU time −5.7 %, median of 6 rounds).
 
 use super::super::lanes::{Kernel, Lanes};
-use super::ColumnExtremes;
 use std::ops::Range;
+
+/// Scratch rows of the separable test (per-column maximum and minimum).
+#[derive(Default)]
+pub(super) struct ColumnExtremes {
+    max: Vec<f32>,
+    min: Vec<f32>,
+}
 
 /// One scan row's test; positions are columns from `cols.start`.
 pub(super) struct RowExtrema<'a> {

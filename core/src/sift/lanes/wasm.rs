@@ -3,7 +3,7 @@
 //! exact emulation (`num::wasm`).
 
 use super::super::num::wasm::{Emulated, Fma4};
-use super::{Kernel, Lanes};
+use super::token::{Kernel, Lanes};
 use core::arch::wasm32::*;
 
 /// SIMD128 with the FMA `F`.

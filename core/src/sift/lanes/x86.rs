@@ -1,6 +1,6 @@
 //! [`Lanes`] for x86-64: AVX-512 F (16 lanes) and AVX2 with FMA (8 lanes).
 
-use super::{Kernel, Lanes};
+use super::token::{Kernel, Lanes};
 use std::arch::x86_64::*;
 
 /// AVX-512 F; only made after the run-time check.

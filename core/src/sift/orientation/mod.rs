@@ -12,11 +12,13 @@ use super::keypoint::{KeyPoint, Refined};
 use super::num::{exp32f_into, fma, gradient_directions_into, rne, FLT_EPSILON};
 use super::params::SiftParams;
 
+mod bins;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
-// §SIFT-1: 36 bins, window σ factor 1.5, radius factor 4.5, peak ratio 0.8.
-const ORI_HIST_BINS: usize = 36;
+use bins::ORI_HIST_BINS;
+
+// §SIFT-1: window σ factor 1.5, radius factor 4.5, peak ratio 0.8.
 const ORI_SIG_FCTR: f32 = 1.5;
 const ORI_RADIUS: f32 = 4.5;
 const ORI_PEAK_RATIO: f32 = 0.8;

@@ -48,7 +48,7 @@ pub fn bin_products(
     let room = n.div_ceil(8) * 8;
     offsets.resize(room.max(offsets.len()), 0);
     prods.resize(room.max(prods.len()), 0.0);
-    let scale = _mm256_set1_ps(super::ORI_HIST_BINS as f32 / 360.0);
+    let scale = _mm256_set1_ps(super::bins::ORI_HIST_BINS as f32 / 360.0);
     let (n36, zero) = (_mm256_set1_epi32(36), _mm256_setzero_si256());
     let bytes = _mm256_set1_epi32(MASKS_BYTES);
     let mut k = 0;
