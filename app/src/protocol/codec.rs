@@ -99,6 +99,20 @@ pub(crate) fn set_image_job(o: &Object, kind: &str, id: u32, bytes: &[u8], lanes
     set(o, "bytes", &Uint8Array::from(bytes).into());
 }
 
+/// A job's progress reply, the same for every kind of worker.
+pub(crate) fn set_progress(o: &Object, id: u32, stage: &str) {
+    set(o, "type", &"progress".into());
+    set(o, "id", &id.into());
+    set(o, "stage", &stage.into());
+}
+
+/// A job's failure reply (a user-facing message), the same for every kind of worker.
+pub(crate) fn set_failed(o: &Object, id: u32, message: &str) {
+    set(o, "type", &"failed".into());
+    set(o, "id", &id.into());
+    set(o, "message", &message.into());
+}
+
 pub(crate) fn kind(o: &JsValue) -> Result<String, String> {
     get_str(o, "type")
 }

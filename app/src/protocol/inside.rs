@@ -2,7 +2,8 @@
 //! of one frame, and the whole-frame sweep of a pair.
 
 use super::codec::{
-    get, get_f32s, get_f64, get_features, get_str, get_typed, get_u32, kind, set, set_features, set_image_job,
+    get, get_f32s, get_f64, get_features, get_str, get_typed, get_u32, kind, set, set_failed, set_features,
+    set_image_job, set_progress,
 };
 use js_sys::{Array, Float32Array, Float64Array, Object, Uint32Array, Uint8Array};
 use siftlab_core::dataset::PoseRow;
@@ -200,14 +201,10 @@ impl InsideReply {
         let o = Object::new();
         match self {
             InsideReply::Progress { id, stage } => {
-                set(&o, "type", &"progress".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "stage", &stage.as_str().into());
+                set_progress(&o, *id, stage);
             }
             InsideReply::Failed { id, message } => {
-                set(&o, "type", &"failed".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "message", &message.as_str().into());
+                set_failed(&o, *id, message);
             }
             InsideReply::Anatomy { id, data: d } => {
                 set(&o, "type", &"anatomyDone".into());

@@ -140,9 +140,7 @@ impl VoReply {
                 set(&o, "kitti", &kitti.as_str().into());
             }
             VoReply::Failed { id, message } => {
-                set(&o, "type", &"failed".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "message", &message.as_str().into());
+                set_failed(&o, *id, message);
             }
         }
         o.into()

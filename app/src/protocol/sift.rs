@@ -80,14 +80,10 @@ impl SiftReply {
         let o = Object::new();
         match self {
             SiftReply::Progress { id, stage } => {
-                set(&o, "type", &"progress".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "stage", &stage.as_str().into());
+                set_progress(&o, *id, stage);
             }
             SiftReply::Failed { id, message } => {
-                set(&o, "type", &"failed".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "message", &message.as_str().into());
+                set_failed(&o, *id, message);
             }
             SiftReply::Done { id, result } => {
                 set(&o, "type", &"done".into());
