@@ -31,6 +31,20 @@ impl WorkerHandle {
         on_message: impl Fn(R) + 'static,
         on_crash: impl Fn() + 'static,
     ) -> Result<WorkerHandle, String> {
+        let deliver = move |data: &JsValue| match decode(data) {
+            Ok(m) => on_message(m),
+            Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
+        };
+        Self::start_with(script, Box::new(deliver), Box::new(on_crash))
+    }
+
+    /// [`WorkerHandle::start`] after the decoding: one copy of the
+    /// transport for every kind of reply.
+    fn start_with(
+        script: &str,
+        deliver: Box<dyn Fn(&JsValue)>,
+        on_crash: Box<dyn Fn()>,
+    ) -> Result<WorkerHandle, String> {
         let opts = web_sys::WorkerOptions::new();
         opts.set_type(web_sys::WorkerType::Module);
         let worker =
@@ -48,10 +62,7 @@ impl WorkerHandle {
                 }
                 return;
             }
-            match decode(&data) {
-                Ok(m) => on_message(m),
-                Err(e) => web_sys::console::error_1(&format!("siftlab: bad worker message: {e}").into()),
-            }
+            deliver(&data);
         });
         let on_error = Closure::<dyn FnMut(JsValue)>::new(move |ev: JsValue| {
             if let Some(e) = ev.dyn_ref::<web_sys::ErrorEvent>() {
