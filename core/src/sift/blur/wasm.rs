@@ -29,8 +29,10 @@ pub fn fused() -> bool {
 // least 2^-120, and far below the f32 maximum. The accumulators then stay
 // in f64 (each holding its f32-rounded value), the halfway test is ORed
 // over the whole block, and a block where it fired (about one in a
-// million sums) is recomputed with the scalar exact FMA. Half the
-// operations of the per-FMA check, on the stage that is most of wasm SIFT.
+// million sums) is recomputed with the scalar exact FMA. Per tap and four
+// pixels that is two f64 multiplies and adds, the split rounding (six
+// operations) and the halfway test (three), 13 operations where the relaxed
+// build has one `relaxed_madd`; docs/performance.md, "The SIMD128 path".
 
 const TAME_MIN: f32 = 7.888_609e-31; // 2^-100
 const TAME_MAX: f32 = 1.267_650_6e30; // 2^100
@@ -55,15 +57,35 @@ pub fn tame_kernel(k: &[f32]) -> bool {
 /// f64 pairs per block: 16 pixels.
 const P: usize = 8;
 
+// The fast path avoids `f32x4.demote_f64x2_zero`: LLVM turns it, followed by
+// a promote or a shuffle, into a scalar demote per lane (an extract, a
+// demote and an insert each), which made the rounding after each tap the
+// blur's largest cost (the row pass 1.8×, the column pass 1.7× slower).
+
+/// Rounds f64 lanes to the nearest f32 value (kept in f64) with Veltkamp's
+/// split, three f64 operations: `t = s·(2^29 + 1)`, `t − (t − s)` is `s`
+/// rounded to nearest at 53 − 29 = 24 bits, f32's precision, for every `s`
+/// in f32's normal range. Only a tie may round either way, and a tie is
+/// exactly what `flag_halfway` sends to the exact scalar path, so the value
+/// kept always equals the FMA's correctly rounded f32.
 #[inline(always)]
-fn round_to_f32(s: v128) -> v128 {
-    f64x2_promote_low_f32x4(f32x4_demote_f64x2_zero(s))
+fn round_split(s: v128) -> v128 {
+    let t = f64x2_mul(s, f64x2_splat(536_870_913.0));
+    f64x2_sub(t, f64x2_sub(t, s))
 }
 
-/// Lanes whose f64 value lies exactly on an f32 halfway point.
+/// Folds the halfway test of four sums (two vectors) into `hard`: a sum lies on an
+/// f32 halfway point exactly when its low 29 bits are 0x1000_0000, that is,
+/// when its low word shifted left by 3 is `i32::MIN`, the smallest i32; so
+/// `hard` keeps the minimum and [`any_halfway`] compares it once per block.
 #[inline(always)]
-fn halfway(s: v128) -> v128 {
-    i64x2_eq(v128_and(s, i64x2_splat(0x1FFF_FFFF)), i64x2_splat(0x1000_0000))
+fn flag_halfway(hard: v128, s0: v128, s1: v128) -> v128 {
+    i32x4_min(hard, i32x4_shl(i32x4_shuffle::<0, 2, 4, 6>(s0, s1), 3))
+}
+
+#[inline(always)]
+fn any_halfway(hard: v128) -> bool {
+    v128_any_true(i32x4_eq(hard, i32x4_splat(i32::MIN)))
 }
 
 fn load_f64(s: &[f64], i: usize) -> v128 {
@@ -72,18 +94,49 @@ fn load_f64(s: &[f64], i: usize) -> v128 {
     unsafe { v128_load(s.as_ptr().cast()) }
 }
 
+/// Four f32 from four f64 lanes holding tame f32 values, by their bits: the
+/// low word of a normal value's f64 bits shifted right by 29 holds the low 9
+/// bits of its exponent and its 23 significand bits, and subtracting the
+/// bias difference (1023 − 127) << 23, modulo 2^32, leaves its f32 bits. Zero,
+/// the one other tame value (a zero high word), stays zero.
+#[inline(always)]
+fn narrow(a: v128, b: v128) -> v128 {
+    let v = i32x4_shuffle::<0, 2, 4, 6>(u64x2_shr(a, 29), u64x2_shr(b, 29));
+    let nonzero = i32x4_ne(i32x4_shuffle::<1, 3, 5, 7>(a, b), i32x4_splat(0));
+    v128_and(i32x4_sub(v, i32x4_splat((896u32 << 23) as i32)), nonzero)
+}
+
 /// Stores 16 f32-valued f64 accumulators as f32.
 #[inline(always)]
 fn store_block(dst: &mut [f32], x: usize, acc: &[v128; P]) {
+    let dst = &mut dst[x..x + 2 * P];
     for q in 0..P / 2 {
-        let v =
-            i32x4_shuffle::<0, 1, 4, 5>(f32x4_demote_f64x2_zero(acc[2 * q]), f32x4_demote_f64x2_zero(acc[2 * q + 1]));
-        store(dst, x + 4 * q, v);
+        store(dst, 4 * q, narrow(acc[2 * q], acc[2 * q + 1]));
     }
 }
 
 thread_local! {
     static WIDE: core::cell::RefCell<Vec<f64>> = const { core::cell::RefCell::new(Vec::new()) };
+}
+
+/// The row in f64, four pixels at a time (LLVM leaves the plain loop scalar).
+fn widen(src: &[f32], wide: &mut Vec<f64>) {
+    wide.clear();
+    wide.resize(src.len(), 0.0);
+    let mut chunks = src.chunks_exact(4);
+    for (c, d) in (&mut chunks).zip(wide.chunks_exact_mut(4)) {
+        let v = load(c, 0);
+        let (lo, hi) = (f64x2_promote_low_f32x4(v), f64x2_promote_low_f32x4(i32x4_shuffle::<2, 3, 2, 3>(v, v)));
+        // SAFETY: `d` holds exactly four f64; v128_store needs no alignment.
+        unsafe {
+            v128_store(d.as_mut_ptr().cast(), lo);
+            v128_store(d.as_mut_ptr().add(2).cast(), hi);
+        }
+    }
+    let done = src.len() - chunks.remainder().len();
+    for (d, &v) in wide[done..].iter_mut().zip(chunks.remainder()) {
+        *d = v as f64;
+    }
 }
 
 /// [`row`] on tame data and a tame kernel.
@@ -92,24 +145,31 @@ pub fn row_tame(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     let n = w + kx.len() - 1;
     WIDE.with(|wide| {
         let mut wide = wide.borrow_mut();
-        wide.clear();
-        wide.extend(padded[..n].iter().map(|&v| v as f64));
+        widen(&padded[..n], &mut wide);
         let mut x = 0;
         while x + 2 * P <= w {
             let k0 = f64x2_splat(kx[0] as f64);
-            let mut acc: [v128; P] = core::array::from_fn(|q| round_to_f32(f64x2_mul(load_f64(&wide, x + 2 * q), k0)));
-            let mut hard = i64x2_splat(0);
+            let src = &wide[x..x + 2 * P];
+            // The first tap is OpenCV's f32 product: exact in f64, then rounded.
+            let mut acc: [v128; P] = core::array::from_fn(|q| f64x2_mul(load_f64(src, 2 * q), k0));
+            let mut hard = i32x4_splat(i32::MAX);
+            for q in 0..P / 2 {
+                hard = flag_halfway(hard, acc[2 * q], acc[2 * q + 1]);
+            }
+            acc = acc.map(round_split);
             for (k, &kv) in kx.iter().enumerate().skip(1) {
                 let kv = f64x2_splat(kv as f64);
                 // One bounds check per tap, not one per vector.
                 let src = &wide[x + k..x + k + 2 * P];
-                for (q, a) in acc.iter_mut().enumerate() {
-                    let s = f64x2_add(f64x2_mul(load_f64(src, 2 * q), kv), *a);
-                    hard = v128_or(hard, halfway(s));
-                    *a = round_to_f32(s);
+                for q in 0..P / 2 {
+                    let s0 = f64x2_add(f64x2_mul(load_f64(src, 4 * q), kv), acc[2 * q]);
+                    let s1 = f64x2_add(f64x2_mul(load_f64(src, 4 * q + 2), kv), acc[2 * q + 1]);
+                    hard = flag_halfway(hard, s0, s1);
+                    acc[2 * q] = round_split(s0);
+                    acc[2 * q + 1] = round_split(s1);
                 }
             }
-            if v128_any_true(hard) {
+            if any_halfway(hard) {
                 row_scalar(padded, kx, dst, x..x + 2 * P);
             } else {
                 store_block(dst, x, &acc);
@@ -133,30 +193,32 @@ fn row_scalar(padded: &[f32], kx: &[f32], dst: &mut [f32], xs: core::ops::Range<
 /// [`column`] on tame rows and a tame kernel.
 pub fn column_tame(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
     let w = dst.len();
-    let high = |v: v128| i32x4_shuffle::<2, 3, 0, 1>(v, v);
+    let high = |v: v128| i32x4_shuffle::<2, 3, 2, 3>(v, v);
     let mut x = 0;
     while x + 2 * P <= w {
         let kc = f32x4_splat(ky[0]);
+        let mid = &centre[x..x + 2 * P];
         // The centre tap is an f32 product, as OpenCV's first multiply.
         let mut acc: [v128; P] = core::array::from_fn(|q| {
-            let v = f32x4_mul(load(centre, x + 4 * (q / 2)), kc);
+            let v = f32x4_mul(load(mid, 4 * (q / 2)), kc);
             f64x2_promote_low_f32x4(if q % 2 == 0 { v } else { high(v) })
         });
-        let mut hard = i64x2_splat(0);
+        let mut hard = i32x4_splat(i32::MAX);
         for (k, (up, down)) in pairs.iter().enumerate() {
             let kv = f64x2_splat(ky[k + 1] as f64);
             let (up, down) = (&up[x..x + 2 * P], &down[x..x + 2 * P]);
             for q in 0..P / 2 {
+                // The pair's f32 sum, rounded as OpenCV's; its product with
+                // the weight is exact in f64.
                 let sum = f32x4_add(load(up, 4 * q), load(down, 4 * q));
-                for (h, part) in [sum, high(sum)].into_iter().enumerate() {
-                    let a = &mut acc[2 * q + h];
-                    let s = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(part), kv), *a);
-                    hard = v128_or(hard, halfway(s));
-                    *a = round_to_f32(s);
-                }
+                let s0 = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(sum), kv), acc[2 * q]);
+                let s1 = f64x2_add(f64x2_mul(f64x2_promote_low_f32x4(high(sum)), kv), acc[2 * q + 1]);
+                hard = flag_halfway(hard, s0, s1);
+                acc[2 * q] = round_split(s0);
+                acc[2 * q + 1] = round_split(s1);
             }
         }
-        if v128_any_true(hard) {
+        if any_halfway(hard) {
             column_scalar(centre, pairs, ky, dst, x..x + 2 * P);
         } else {
             store_block(dst, x, &acc);
@@ -339,6 +401,49 @@ mod tests {
             }
         }
         panic!("no hard sum found");
+    }
+
+    /// The fast path's rounding and narrowing against Rust's f64 → f32 conversion,
+    /// on random tame values of every binade (2^-120 to 2^100) and zero: the
+    /// split rounds every value that is not a tie as the conversion does, and
+    /// `narrow` returns the f32 of every f32-valued lane.
+    #[wasm_bindgen_test]
+    fn split_rounding_and_narrowing_equal_the_conversion() {
+        use core::arch::wasm32::*;
+        let mut state = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            state
+        };
+        let lane = |v: v128| [f64x2_extract_lane::<0>(v), f64x2_extract_lane::<1>(v)];
+        let (mut checked, mut ties) = (0, 0);
+        for i in 0..400_000u32 {
+            let r = next();
+            // Exponent 2^-120 ..= 2^100, random significand; every 64th a
+            // sum with few low bits, where ties are common.
+            let e = (r >> 52) % 221;
+            let bits = ((1023 - 120 + e) << 52) | (r & ((1 << 52) - 1));
+            let bits = if i % 64 == 0 { bits & !((1 << 27) - 1) } else { bits };
+            let s = [f64::from_bits(bits), if i % 97 == 0 { 0.0 } else { f64::from_bits(bits ^ (r >> 40)) }];
+            let v = f64x2(s[0], s[1]);
+            let got = lane(wasm::round_split(v));
+            for (k, &x) in s.iter().enumerate() {
+                if x.to_bits() & 0x1FFF_FFFF == 0x1000_0000 {
+                    ties += 1;
+                    continue;
+                }
+                let want = x as f32;
+                assert_eq!(got[k].to_bits(), (want as f64).to_bits(), "{x:e}");
+                checked += 1;
+            }
+            let n = wasm::narrow(f64x2(got[0], got[1]), f64x2(got[1], 0.0));
+            let n = [f32x4_extract_lane::<0>(n), f32x4_extract_lane::<1>(n), f32x4_extract_lane::<2>(n)];
+            assert_eq!(n.map(f32::to_bits), [got[0] as f32, got[1] as f32, got[1] as f32].map(f32::to_bits));
+            assert_eq!(f32x4_extract_lane::<3>(wasm::narrow(v, f64x2_splat(0.0))).to_bits(), 0);
+        }
+        assert!(checked > 790_000 && ties > 10, "{checked} {ties}");
     }
 
     #[wasm_bindgen_test]
