@@ -96,13 +96,17 @@ pub fn fma_emulated_x4(
         f64x2_mul(f64x2_promote_low_f32x4(high(a)), f64x2_promote_low_f32x4(high(b))),
         f64x2_promote_low_f32x4(high(c)),
     );
-    let hard = |s: v128| {
-        let midpoint = i64x2_eq(v128_and(s, i64x2_splat(0x1FFF_FFFF)), i64x2_splat(0x1000_0000));
-        let tiny =
-            v128_and(f64x2_lt(f64x2_abs(s), f64x2_splat(f32::MIN_POSITIVE as f64)), f64x2_ne(s, f64x2_splat(0.0)));
-        v128_or(midpoint, tiny)
-    };
-    if v128_any_true(v128_or(hard(lo), hard(hi))) {
+    // Both tests on the four sums' words at once, as integers (half the
+    // operations of testing each f64 pair). Halfway: the low 29 bits are
+    // 0x1000_0000, so the low word shifted left by 3 is i32::MIN.
+    let halfway = i32x4_eq(i32x4_shl(i32x4_shuffle::<0, 2, 4, 6>(lo, hi), 3), i32x4_splat(i32::MIN));
+    // f32-subnormal: 0 < |s| < 2^-126, that is, the high word without its
+    // sign (shifted out) is below 2^-126's, 0x3810_0000 << 1, and not zero.
+    // A zero high word is a zero sum: a nonzero sum of f32 products and f32
+    // values is at least 2^-298, far above the f64 subnormals.
+    let magnitude = i32x4_shl(i32x4_shuffle::<1, 3, 5, 7>(lo, hi), 1);
+    let tiny = u32x4_lt(i32x4_sub(magnitude, i32x4_splat(1)), u32x4_splat(0x7020_0000 - 1));
+    if v128_any_true(v128_or(halfway, tiny)) {
         let lanes = |v: v128| {
             [
                 f32x4_extract_lane::<0>(v),
