@@ -1,7 +1,8 @@
 // SIFT per frame in the app's two worker builds, two builds of the site interleaved in one
 // run (docs/performance.md, "The SIMD128 path"): for each demo frame 0-5, one SIFT in every
 // page in turn, each page kept open (warm) and fed one frame at a time, as
-// tests/e2e/bench.mjs does. Medians per page, and the portable/relaxed ratio per site.
+// tests/e2e/bench.mjs does (each round on freshly loaded pages: a page keeps the SIFT of a
+// frame it has seen). Medians per page, and the portable/relaxed ratio per site.
 //   node tests/scripts/bench_simd128.mjs --a /tmp/dist-before --b dist [--engine chromium|webkit] [--rounds 1]
 // Chromium (playwright-core) opens four pages: each site with the relaxed-SIMD worker and
 // with `?wasm=portable`. WebKitGTK (WebDriver, under xvfb-run) has no relaxed SIMD, so two
@@ -38,8 +39,10 @@ if (engine === 'chromium') {
   for (const k of Object.keys(sites)) {
     for (const [build, q] of [['relaxed', ''], ['portable', '&wasm=portable']]) {
       const page = await browser.newPage();
-      await page.goto(`${servers[k].base}?src=folder${q}`);
+      const url = `${servers[k].base}?src=folder${q}`;
+      await page.goto(url);
       pages[`${k}-${build}`] = {
+        reload: () => page.goto(url),
         sift: async (i) => {
           await page.setInputFiles('[data-testid="frame-prev"]', frame(i));
           await page.waitForFunction(done, String(i).padStart(6, '0'), { timeout: 300000 });
@@ -53,8 +56,10 @@ if (engine === 'chromium') {
     const b = await launch(engine);
     closers.push(() => b.close());
     const page = await b.newPage();
-    await page.goto(`${servers[k].base}?src=folder`);
+    const url = `${servers[k].base}?src=folder`;
+    await page.goto(url);
     pages[`${k}-simd128`] = {
+      reload: () => page.goto(url),
       sift: async (i) => {
         await page.setInputFiles('[data-testid="frame-prev"]', frame(i));
         await page.waitForFunction(done, String(i).padStart(6, '0'), { timeout: 300000 });
@@ -66,6 +71,8 @@ if (engine === 'chromium') {
 
 const ms = Object.fromEntries(Object.keys(pages).map((k) => [k, []]));
 for (let r = 0; r < rounds; r++) {
+  // A fresh page each round: the page keeps the SIFT of a frame it has seen.
+  if (r > 0) for (const p of Object.values(pages)) await p.reload();
   for (let i = 0; i < 6; i++) {
     // Alternate which site goes first, so neither always runs right after the other.
     const order = Object.keys(pages);

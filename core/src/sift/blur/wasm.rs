@@ -146,8 +146,12 @@ pub fn row_tame(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     WIDE.with(|wide| {
         let mut wide = wide.borrow_mut();
         widen(&padded[..n], &mut wide);
-        let mut x = 0;
-        while x + 2 * P <= w {
+        // The last block overlaps the one before rather than leaving up to
+        // 15 pixels to the scalar emulation, a chain of dependent FMAs each
+        // (5 % of the portable worker's profile); an overlapped pixel is
+        // recomputed from the same taps, so it gets the same value.
+        let (starts, rest) = super::blocks(w, 2 * P);
+        for x in starts {
             let k0 = f64x2_splat(kx[0] as f64);
             let src = &wide[x..x + 2 * P];
             // The first tap is OpenCV's f32 product: exact in f64, then rounded.
@@ -174,9 +178,8 @@ pub fn row_tame(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
             } else {
                 store_block(dst, x, &acc);
             }
-            x += 2 * P;
         }
-        row_scalar(padded, kx, dst, x..w);
+        row_scalar(padded, kx, dst, rest..w);
     });
 }
 
@@ -194,8 +197,9 @@ fn row_scalar(padded: &[f32], kx: &[f32], dst: &mut [f32], xs: core::ops::Range<
 pub fn column_tame(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32]) {
     let w = dst.len();
     let high = |v: v128| i32x4_shuffle::<2, 3, 2, 3>(v, v);
-    let mut x = 0;
-    while x + 2 * P <= w {
+    // Blocks as in `row_tame`, the last one overlapping.
+    let (starts, rest) = super::blocks(w, 2 * P);
+    for x in starts {
         let kc = f32x4_splat(ky[0]);
         let mid = &centre[x..x + 2 * P];
         // The centre tap is an f32 product, as OpenCV's first multiply.
@@ -223,9 +227,8 @@ pub fn column_tame(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: 
         } else {
             store_block(dst, x, &acc);
         }
-        x += 2 * P;
     }
-    column_scalar(centre, pairs, ky, dst, x..w);
+    column_scalar(centre, pairs, ky, dst, rest..w);
 }
 
 fn column_scalar(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut [f32], xs: core::ops::Range<usize>) {
