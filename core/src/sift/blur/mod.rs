@@ -375,7 +375,9 @@ fn accumulate_row(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
         return wasm::row_fused(padded, kx, dst);
     }
     #[cfg(target_arch = "wasm32")]
-    return if wasm::tame_kernel(kx) && wasm::tame(&padded[..dst.len() + kx.len() - 1]) {
+    return if wasm::exact_kernel(kx) && wasm::sixteenths(&padded[..dst.len() + kx.len() - 1]) {
+        wasm::row_exact(padded, kx, dst)
+    } else if wasm::tame_kernel(kx) && wasm::tame(&padded[..dst.len() + kx.len() - 1]) {
         wasm::row_tame(padded, kx, dst)
     } else {
         wasm::row(padded, kx, dst)

@@ -183,6 +183,86 @@ pub fn row_tame(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     });
 }
 
+// The base image's row pass (§SIFT-2: the upsampled 8-bit image, every value
+// a multiple of 1/16 below 256, so at most 12 significant bits). There every
+// product is exact in f64 (12 + 24 bits), every f32 accumulator and product
+// lies on the grid of the data's 1/16 times the kernel's lowest weight bit,
+// and every sum stays below 256 · Σk: when that span fits f64's 53 bits
+// (49 bits for the base kernel) every f64 sum is exact, so the FMA's result
+// is that sum rounded once to f32, ties to even. Ties are common on such
+// data (the sums have few bits): the halfway test of `row_tame` flagged
+// a fifth of these blocks, each then redone by the scalar emulation.
+
+/// Every value is a multiple of 1/16 in [0, 256): at most 12 significant bits.
+pub fn sixteenths(values: &[f32]) -> bool {
+    let (zero, top, sixteen) = (f32x4_splat(0.0), f32x4_splat(256.0), f32x4_splat(16.0));
+    let mut ok = i32x4_splat(-1);
+    let mut chunks = values.chunks_exact(4);
+    for c in &mut chunks {
+        let v = load(c, 0);
+        let t = f32x4_mul(v, sixteen);
+        ok = v128_and(ok, v128_and(f32x4_eq(f32x4_nearest(t), t), v128_and(f32x4_ge(v, zero), f32x4_lt(v, top))));
+    }
+    i32x4_all_true(ok)
+        && chunks.remainder().iter().all(|&v| (0.0..256.0).contains(&v) && (v * 16.0).round_ties_even() == v * 16.0)
+}
+
+/// Whether every f64 sum of the row pass over [`sixteenths`] data is exact
+/// with the kernel `k` (tame, its weights' lowest set bit and sum decide).
+pub fn exact_kernel(k: &[f32]) -> bool {
+    if !tame_kernel(k) {
+        return false;
+    }
+    // The exponent of the lowest set bit of any weight (all are normal).
+    let lsb = k
+        .iter()
+        .map(|&v| {
+            let b = v.to_bits();
+            ((b >> 23) & 0xFF) as i32 - 150 + ((b & 0x7F_FFFF) | 0x80_0000).trailing_zeros() as i32
+        })
+        .min()
+        .unwrap_or(0);
+    // Sums below 2^top (a margin for the accumulators' roundings up), on the grid 2^(lsb − 4).
+    let sum: f64 = k.iter().map(|&v| v as f64).sum();
+    let top = (256.0 * sum * 1.001).log2().floor() as i32 + 1;
+    top - (lsb - 4) <= 53
+}
+
+/// An exact, non-negative f64 sum in f32's normal range (or 0) rounded to
+/// f32, ties to even, kept in f64: add just under half an f32 ulp plus the
+/// f32 lowest bit, then clear the 29 bits f32 lacks (a carry reaches the
+/// exponent as it should).
+#[inline(always)]
+fn round_even(s: v128) -> v128 {
+    let lsb = v128_and(u64x2_shr(s, 29), i64x2_splat(1));
+    v128_and(i64x2_add(i64x2_add(s, i64x2_splat(0x0FFF_FFFF)), lsb), i64x2_splat(!0x1FFF_FFFF))
+}
+
+/// [`row`] on [`sixteenths`] data with an [`exact_kernel`]: no halfway test, no redo.
+pub fn row_exact(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
+    let w = dst.len();
+    let n = w + kx.len() - 1;
+    WIDE.with(|wide| {
+        let mut wide = wide.borrow_mut();
+        widen(&padded[..n], &mut wide);
+        let (starts, rest) = super::blocks(w, 2 * P);
+        for x in starts {
+            let k0 = f64x2_splat(kx[0] as f64);
+            let src = &wide[x..x + 2 * P];
+            let mut acc: [v128; P] = core::array::from_fn(|q| round_even(f64x2_mul(load_f64(src, 2 * q), k0)));
+            for (k, &kv) in kx.iter().enumerate().skip(1) {
+                let kv = f64x2_splat(kv as f64);
+                let src = &wide[x + k..x + k + 2 * P];
+                for (q, a) in acc.iter_mut().enumerate() {
+                    *a = round_even(f64x2_add(f64x2_mul(load_f64(src, 2 * q), kv), *a));
+                }
+            }
+            store_block(dst, x, &acc);
+        }
+        row_scalar(padded, kx, dst, rest..w);
+    });
+}
+
 fn row_scalar(padded: &[f32], kx: &[f32], dst: &mut [f32], xs: core::ops::Range<usize>) {
     for i in xs {
         let mut a = padded[i] * kx[0];
