@@ -139,6 +139,18 @@ fn widen(src: &[f32], wide: &mut Vec<f64>) {
     }
 }
 
+/// Starts of 16-pixel blocks covering `0..w`, the last one ending at `w` and
+/// overlapping the one before; and where the scalar rest starts (`w`, or 0
+/// when `w` < 16). The same rule as the native passes' `blocks`, kept here so
+/// that this file needs nothing from `mod.rs`.
+#[inline(always)]
+fn blocks(w: usize) -> (impl Iterator<Item = usize>, usize) {
+    let b = 2 * P;
+    let whole = if w < b { 0 } else { w / b };
+    let last = (w >= b && !w.is_multiple_of(b)).then(|| w - b);
+    ((0..whole).map(move |i| i * b).chain(last), if w < b { 0 } else { w })
+}
+
 /// [`row`] on tame data and a tame kernel.
 pub fn row_tame(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     let w = dst.len();
@@ -150,7 +162,7 @@ pub fn row_tame(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
         // 15 pixels to the scalar emulation, a chain of dependent FMAs each
         // (5 % of the portable worker's profile); an overlapped pixel is
         // recomputed from the same taps, so it gets the same value.
-        let (starts, rest) = super::blocks(w, 2 * P);
+        let (starts, rest) = blocks(w);
         for x in starts {
             let k0 = f64x2_splat(kx[0] as f64);
             let src = &wide[x..x + 2 * P];
@@ -245,7 +257,7 @@ pub fn row_exact(padded: &[f32], kx: &[f32], dst: &mut [f32]) {
     WIDE.with(|wide| {
         let mut wide = wide.borrow_mut();
         widen(&padded[..n], &mut wide);
-        let (starts, rest) = super::blocks(w, 2 * P);
+        let (starts, rest) = blocks(w);
         for x in starts {
             let k0 = f64x2_splat(kx[0] as f64);
             let src = &wide[x..x + 2 * P];
@@ -278,7 +290,7 @@ pub fn column_tame(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: 
     let w = dst.len();
     let high = |v: v128| i32x4_shuffle::<2, 3, 2, 3>(v, v);
     // Blocks as in `row_tame`, the last one overlapping.
-    let (starts, rest) = super::blocks(w, 2 * P);
+    let (starts, rest) = blocks(w);
     for x in starts {
         let kc = f32x4_splat(ky[0]);
         let mid = &centre[x..x + 2 * P];
