@@ -466,7 +466,7 @@ pub fn column(centre: &[f32], pairs: &[(&[f32], &[f32])], ky: &[f32], dst: &mut 
 mod tests {
     use super as wasm;
     use super::super::super::num::fma_emulated;
-    use super::super::gaussian_kernel;
+    use super::super::kernel::gaussian_kernel;
     use wasm_bindgen_test::*;
 
     wasm_bindgen_test_configure!(run_in_browser);

@@ -4,7 +4,7 @@
 //! library call per tap; and the AVX2 two-row column pass. Every pixel sees
 //! the taps of docs/fidelity.md §SIFT-3 in its order, fused where it fuses.
 
-use super::{accumulate_column_generic, accumulate_row_generic, blocks, BLOCK};
+use super::generic::{accumulate_column_generic, accumulate_row_generic, blocks, BLOCK};
 use std::arch::x86_64::*;
 
 #[target_feature(enable = "avx2,fma")]
