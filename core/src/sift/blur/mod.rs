@@ -147,8 +147,8 @@ fn blur_rows<R: Rows>(src: &R, kx: &[f32], ky: &[f32], y0: usize, out: &mut [f32
 /// right, the first tap a product and every further tap one FMA — the order
 /// of OpenCV's AVX2 loop and its GCC-contracted scalar tail (§SIFT-3) — over the row
 /// extended by BORDER_REFLECT_101. Interior pixels read the row in place;
-/// only the r pixels at each end go through a small reflected copy (copying
-/// every row first was 3 % of a VO frame's CPU time). Each pixel's taps are
+/// only the r pixels at each end go through a small reflected copy, so no
+/// row is copied whole. Each pixel's taps are
 /// the same either way.
 fn row_filter(row: &[f32], kx: &[f32], padded: &mut [f32], dst: &mut [f32]) {
     let (w, r) = (row.len(), kx.len() / 2);

@@ -141,8 +141,8 @@ pub fn histogram(levels: &[Plane], refined: &Refined, p: &SiftParams) -> Histogr
 }
 
 /// The buffers of one histogram, kept per thread between calls: a KITTI
-/// frame takes a few thousand histograms, and allocating six buffers for
-/// each was about 1 % of a VO run.
+/// frame takes a few thousand histograms, too many to allocate six buffers
+/// for each (docs/performance.md, Orientation and descriptors).
 #[derive(Default)]
 struct Scratch {
     dxs: Vec<f32>,
@@ -185,9 +185,8 @@ fn raw_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes
     // Row |i| of the window's Gaussian weights exp((i² + j²)·scale),
     // j = −rr..=rr, the rows for i and −i being the same: each window row
     // then copies its span. The arguments first, then one pass of the
-    // exponential over them, eight lanes on AVX2 (one scalar exp per
-    // distinct distance, then a lookup per entry, was a quarter of this
-    // function).
+    // exponential over them, eight lanes on AVX2 (cheaper than one scalar
+    // exp per distinct distance and a lookup per entry).
     let rr = radius.max(0) as usize;
     let span = 2 * rr + 1;
     w_args.clear();
@@ -218,9 +217,8 @@ fn raw_hist_with(img: &Plane, r: usize, c: usize, radius: i32, sigma: f32, lanes
         }
         let (up, row, down) = (img.row(y as usize - 1), img.row(y as usize), img.row(y as usize + 1));
         // The window's row AHEAD rows further down, asked for now: the
-        // keypoint-ahead prefetch (`prefetch_histogram_window`) alone left
-        // a third of this function's time on the first load of each
-        // window's bottom row (6.7 → 5.2 % of a VO profile with both).
+        // keypoint-ahead prefetch (`prefetch_histogram_window`) alone leaves
+        // the first load of each window's bottom row waiting on memory.
         let ahead = y as usize + 1 + AHEAD;
         if ahead < img.height {
             prefetch_span(img.row(ahead), c.saturating_sub(rr + 1), c + rr + 8);
@@ -315,8 +313,7 @@ fn smooth(t: &[f32; 40]) -> [f32; 36] {
 /// Asks for the cache lines of the (2R+1)² window around (r, c) all at once.
 /// The window's rows lie a plane-row apart, a stride the hardware
 /// prefetcher does not follow, so otherwise each row is a cache miss the
-/// gradient loop waits for in turn (this was the hottest line of the
-/// histogram).
+/// gradient loop waits for in turn.
 #[inline(always)]
 fn prefetch_window(img: &Plane, r: usize, c: usize, reach: usize) {
     if img.width == 0 || img.height == 0 {

@@ -55,7 +55,7 @@ impl Level {
         let ph = h + 2 * PAD;
         let mut padded = vec![0u8; stride * ph + SLACK];
         // Only the PAD columns on each side are reflected; the row itself
-        // is one slice copy (a gather per pixel was 0.5 % of a VO run).
+        // is one slice copy, not a gather per pixel.
         let (left, right): (Vec<usize>, Vec<usize>) =
             (0..PAD).map(|j| (reflect101(j as isize - PAD as isize, w), reflect101((w + j) as isize, w))).unzip();
         for py in 0..ph {
@@ -103,8 +103,8 @@ impl Deriv {
         let stride = w + 2 * PAD;
         let len = stride * (h + 2 * PAD) + SLACK;
         // Written front to back, each element once: the zero border, then
-        // per row its pixels and the border around them (zeroing both whole
-        // planes first was half this function's time).
+        // per row its pixels and the border around them, so no plane is
+        // zeroed first.
         let (mut ix, mut iy) = (Vec::with_capacity(len), Vec::with_capacity(len));
         let (mut rx, mut ry) = (vec![0i16; w], vec![0i16; w]);
         let mut s = vec![0i16; w];

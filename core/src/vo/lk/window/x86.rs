@@ -389,9 +389,9 @@ fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32
         sy.add(d, load(&p.y[y]));
     });
     // The bounds in a second pass over the stored differences: in the first
-    // their two accumulators did not fit in the 16 registers, and one went
-    // through the stack every row (a store-to-load chain that was a third
-    // of this function's samples). Integer sums, so the order is free.
+    // their two accumulators would not fit in the 16 registers beside the
+    // others, and one would go through the stack every row. Integer sums, so
+    // the order is free.
     for y in 0..WIN {
         let d = load(&p.d[y]);
         let ad = (_mm256_abs_epi16(d.0), _mm_abs_epi16(d.1));
