@@ -152,7 +152,7 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
                             {cells.into_iter().map(|c| view! { <td>{c}</td> }).collect_view()}
                             <td>{url.map(|u| view! {
                                 <a href=u download=file.clone() data-testid="vo-compare-poses"
-                                    aria-label=format!("{name}: estimated poses, KITTI format")>{file.clone()}</a>
+                                    aria-label=format!("{file}, the estimated poses of {name} in KITTI format")>{file.clone()}</a>
                             })}</td>
                         </tr>
                     }
