@@ -139,16 +139,11 @@ fn widen(src: &[f32], wide: &mut Vec<f64>) {
     }
 }
 
-/// Starts of 16-pixel blocks covering `0..w`, the last one ending at `w` and
-/// overlapping the one before; and where the scalar rest starts (`w`, or 0
-/// when `w` < 16). The same rule as the native passes' `blocks`, kept here so
-/// that this file needs nothing from `mod.rs`.
+/// Starts of 16-pixel blocks covering `0..w`, the last one overlapping the
+/// one before, and where the scalar rest starts: the native passes' rule.
 #[inline(always)]
 fn blocks(w: usize) -> (impl Iterator<Item = usize>, usize) {
-    let b = 2 * P;
-    let whole = if w < b { 0 } else { w / b };
-    let last = (w >= b && !w.is_multiple_of(b)).then(|| w - b);
-    ((0..whole).map(move |i| i * b).chain(last), if w < b { 0 } else { w })
+    super::generic::blocks(w, 2 * P)
 }
 
 /// [`row`] on tame data and a tame kernel.
