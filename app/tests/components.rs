@@ -45,7 +45,7 @@ const GET_INFO: &str = include_str!("../../tests/fixtures/golden-avx2/get_info.j
 
 /// The frame ids of the bundled demo (`www/demo/MyKITTI`).
 fn demo_ids() -> Vec<u32> {
-    (0..100).chain([119, 120, 149, 150]).collect()
+    (0..=150).collect()
 }
 
 /// Reads a `SIFTGLD1` file (format in tests/fixtures/README.md).
@@ -623,24 +623,24 @@ fn the_demo_feature_is_large_central_and_matched() {
 }
 
 /// The odometry's control counts as the lab's `view_trajectory FRAME_ID`: the
-/// demo offers frames 0 … 99 (its 119, 120, 149, 150 are not in the run), and a
-/// FRAME_ID past the run is refused with the reason, before any frame is read.
+/// demo offers frames 0 … 150 and starts on the manual's `view_trajectory 150`,
+/// and a FRAME_ID past the run is refused with the reason, before any frame is read.
 #[wasm_bindgen_test]
 async fn the_odometry_control_counts_frames_as_the_lab() {
     let lab = loaded_lab(1);
     let root = mount(lab);
     leptos::task::tick().await;
     let input: web_sys::HtmlInputElement = q(&root, "vo-frame-id").unwrap().unchecked_into();
-    assert_eq!(input.value(), "99");
-    assert_eq!(text(&root, "vo-range"), "frames 0 to 99 (100 frames) · available: frames 0 to 99");
+    assert_eq!(input.value(), "150");
+    assert_eq!(text(&root, "vo-range"), "frames 0 to 150 (151 frames) · available: frames 0 to 150");
     set_value(&root, "vo-frame-id", "4", "input");
     leptos::task::tick().await;
     assert!(text(&root, "vo-range").starts_with("frames 0 to 4 (5 frames)"), "{}", text(&root, "vo-range"));
-    set_value(&root, "vo-frame-id", "120", "input");
+    set_value(&root, "vo-frame-id", "151", "input");
     q(&root, "vo-run").unwrap().click();
     leptos::task::tick().await;
     assert_eq!(
         text(&root, "vo-error"),
-        "FRAME_ID 120 needs frames 0 to 120 (121 frames), but the frames in a row from 0 are frames 0 to 99 (100 frames)"
+        "FRAME_ID 151 needs frames 0 to 151 (152 frames), but the frames in a row from 0 are frames 0 to 150 (151 frames)"
     );
 }

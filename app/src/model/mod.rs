@@ -11,6 +11,7 @@ pub mod lab_manual;
 pub mod odometry;
 pub mod parse;
 pub mod plot;
+pub mod vo_frame;
 pub mod pylit;
 pub mod see_inside;
 pub mod selfcheck;

@@ -1,10 +1,13 @@
-//! The lab manual's seven `get_info` examples one click away, and — whenever
+//! The lab manual's eight `get_info` examples one click away, and — whenever
 //! the view is one of them, by a click, a link or typed settings — the
-//! manual's printed value beside siftlab's, with a mark.
+//! manual's printed value beside siftlab's, with a mark. The introduction's
+//! example is the one whose printed tuple OpenCV 4.8.0.76 gives at another
+//! feature index: the comparison says why and offers that feature.
 
 use crate::model::frameset::has_pair;
 use crate::model::lab::{Lab, Source, Which};
 use crate::model::lab_manual::{example_for, example_kind, threshold_text, verdict};
+use crate::model::parse::parse_feature;
 use crate::services::loading::{self, frame_path};
 use leptos::prelude::*;
 use siftlab_core::manual::EXAMPLES;
@@ -63,6 +66,7 @@ pub fn ManualExamples() -> impl IntoView {
                     >
                         <span class="task">{ex.task}</span>
                         <code>{ex.command()}</code>
+                        {ex.differs.map(|d| view! { <span class="differs">{format!(" · printed tuple differs: feature {} here", d.feature)}</span> })}
                     </button>
                 </li>
             }
@@ -73,7 +77,7 @@ pub fn ManualExamples() -> impl IntoView {
             <h3>
                 "Lab manual examples "
                 <span class="muted small">
-                    "— the manual's seven "<code>"get_info"</code>" examples on the bundled KITTI frames; "
+                    "— the manual's eight "<code>"get_info"</code>" examples on the bundled KITTI frames; "
                     "a click loads the pair and the settings"
                 </span>
             </h3>
@@ -88,6 +92,7 @@ pub fn ManualComparison() -> impl IntoView {
     let lab = expect_context::<Lab>();
     move || {
         let ex = EXAMPLES[current_example(lab)?];
+        let feature = parse_feature(&lab.feature_text.get()).ok()?;
         let loading = format!("… loading frames {} and {}", ex.frame - 1, ex.frame);
         // Only the example's own pair counts: not the previous pair while it loads.
         let got: Result<String, String> = if pair_shown(lab, ex.frame as u32) {
@@ -100,13 +105,28 @@ pub fn ManualComparison() -> impl IntoView {
             Err(loading)
         };
         let mark = got.as_deref().ok().map(|g| {
-            let (ok, text) = verdict(ex.expected, g);
+            let (ok, text) = verdict(&ex, feature, g);
             view! { <p class=if ok { "mark ok" } else { "mark bad" } data-testid="manual-mark">{text}</p> }
+        });
+        // The one example whose tuple sits at another index here: a click on
+        // either index shows the other.
+        let other = ex.differs.map(|d| {
+            let (to, label) = if feature == d.feature {
+                (ex.feature, format!("back to feature {} (the manual's index)", ex.feature))
+            } else {
+                (d.feature, format!("show feature {} (the manual's tuple)", d.feature))
+            };
+            view! {
+                <button class="secondary" data-testid="manual-other-feature" on:click=move |_| lab.set_feature(to)>
+                    {label}
+                </button>
+            }
         });
         Some(view! {
             <div class="manual-compare" data-testid="manual-compare">
                 <p class="muted">
-                    "The lab manual's "{ex.task}" example "<code>{ex.command()}</code>":"
+                    "The lab manual's "{ex.task}" example "<code>{ex.command()}</code>
+                    {(feature != ex.feature).then(|| view! { ", here at "<code>{ex.command_for(feature)}</code> })}":"
                 </p>
                 <dl>
                     <dt>"manual"</dt>
@@ -119,6 +139,7 @@ pub fn ManualComparison() -> impl IntoView {
                     </dd>
                 </dl>
                 {mark}
+                {other}
             </div>
         })
     }

@@ -15,6 +15,7 @@ mod result;
 mod see_inside;
 mod trajectory;
 mod vo_compare;
+mod vo_frame;
 mod vo_plot;
 mod whole_frame;
 

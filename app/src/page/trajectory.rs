@@ -4,9 +4,11 @@
 //! solid, estimate dashed, in the palette's colours), with the trajectory error and
 //! the lab's window as a PNG to download. A menu swaps LK for the student's
 //! matcher (`vo::matched`); the metrics and the core's figures follow each run,
-//! and [`VoCompare`] runs all four trackers side by side.
+//! [`VoFrameView`] shows what the loop did with each frame, and [`VoCompare`]
+//! runs all four trackers side by side.
 
 use super::vo_compare::VoCompare;
+use super::vo_frame::{FrameStep, VoFrameView};
 use super::vo_plot::VoFigures;
 use crate::model::frameset::{run_from_zero, vo_frame_count, vo_range_label};
 use crate::model::lab::Lab;
@@ -22,6 +24,9 @@ use siftlab_core::render::coordinates_text;
 use siftlab_core::vo::TrajectoryMetrics;
 
 type P3 = [f64; 3];
+
+/// The lab manual's odometry example: `view_trajectory 150`.
+const MANUAL_FRAME_ID: u32 = 150;
 /// One plotted step: frame, estimate, ground truth.
 type Step = (u32, P3, Option<P3>);
 
@@ -55,7 +60,7 @@ pub fn TrajectoryView() -> impl IntoView {
     let running = RwSignal::new(false);
     let error = RwSignal::new(None::<String>);
     let done = RwSignal::new(None::<Done>);
-    let frame_url = RwSignal::new(None::<String>);
+    let frame_steps = RwSignal::new(Vec::<FrameStep>::new());
     // The tracker: "lk" (the lab's) or a strategy with its threshold.
     let tracker = RwSignal::new("lk".to_string());
     let threshold = RwSignal::new(String::new());
@@ -68,7 +73,7 @@ pub fn TrajectoryView() -> impl IntoView {
     let available = move || lab.source.with(|s| run_from_zero(s.frames()));
     Effect::new(move |_| frame_text.set(available().saturating_sub(1).to_string()));
 
-    let run = move |_| {
+    let run = move |_: ()| {
         let n = match vo_frame_count(&frame_text.get_untracked(), available()) {
             Ok(n) => n,
             Err(e) => {
@@ -92,6 +97,7 @@ pub fn TrajectoryView() -> impl IntoView {
         }
         done.set(None);
         steps.set(vec![]);
+        frame_steps.set(vec![]);
         total.set(n);
         running.set(true);
         let source = lab.source.get_untracked();
@@ -107,11 +113,9 @@ pub fn TrajectoryView() -> impl IntoView {
             frames.set_value(fr.clone());
             started_ms.set_value(crate::platform::now_ms());
             let on_event = move |m| match m {
-                VoReply::Step { frame, position, truth, .. } => {
+                VoReply::Step { frame, position, truth, counts, detail, .. } => {
                     steps.update(|s| s.push((frame, position, truth)));
-                    let url = frames.with_value(|f| f.get(frame as usize).and_then(|b| blob_url(b)));
-                    revoke(frame_url.get_untracked());
-                    frame_url.set(url);
+                    frame_steps.update(|s| s.push(FrameStep { counts, detail: detail.map(|d| std::sync::Arc::from(d)) }));
                 }
                 VoReply::Metrics { metrics: m, .. } => metrics.set(Some(TrajectoryMetrics::from_array(&m))),
                 VoReply::Done { ate, png, ms, kitti, .. } => {
@@ -181,13 +185,30 @@ pub fn TrajectoryView() -> impl IntoView {
                             on:input=move |ev| threshold.set(event_target_value(&ev))/>
                     </label>
                 </Show>
-                <button class="primary" data-testid="vo-run" on:click=run prop:disabled=move || running.get() || available() < 2>
+                <button class="primary" data-testid="vo-run" on:click=move |_| run(()) prop:disabled=move || running.get() || available() < 2>
                     "Run the odometry"
                 </button>
                 <Show when=move || running.get()>
                     <button on:click=stop>"Stop"</button>
                 </Show>
             </div>
+            <p class="small">
+                <button
+                    class="manual-ex"
+                    data-testid="vo-manual-150"
+                    title="FRAME_ID 150 with the lab's Lucas–Kanade tracker, as the manual's first odometry example"
+                    prop:disabled=move || running.get() || available() < MANUAL_FRAME_ID + 1
+                    on:click=move |_| {
+                        frame_text.set(MANUAL_FRAME_ID.to_string());
+                        tracker.set("lk".into());
+                        run(());
+                    }
+                >
+                    <span class="task">"Lab manual example"</span>
+                    <code>"view_trajectory 150"</code>
+                </button>
+                <span class="muted">" — frames 0 … 150, through the first right turn (frames ~100–125)"</span>
+            </p>
             {move || error.get().map(|e| view! { <p class="error" data-testid="vo-error" role="alert">{e}</p> })}
             <Show when=move || running.get() || !steps.with(|s| s.is_empty())>
                 <div class="vo-progress" data-testid="vo-progress">
@@ -204,9 +225,7 @@ pub fn TrajectoryView() -> impl IntoView {
                         <VoFigures truth=truth runs=runs name="vo"/>
                         <p class="mono small" data-testid="vo-coordinates">{move || coordinates_text(&last())}</p>
                     </div>
-                    <div class="vo-frame">
-                        {move || frame_url.get().map(|u| view! { <img src=u alt="the current camera frame" class="vo-img"/> })}
-                    </div>
+                    <VoFrameView frames=frames steps=frame_steps lk=Signal::derive(move || strategy_run.get().is_none())/>
                 </div>
             </Show>
             {move || done.get().map(|d| view! {

@@ -5,6 +5,7 @@
 use super::codec::*;
 use js_sys::{Object, Uint8Array};
 use siftlab_core::sift::Features;
+use siftlab_core::vo::StepDetail;
 use wasm_bindgen::{JsCast, JsValue};
 
 /// Page → tracking worker.
@@ -29,15 +30,16 @@ pub enum VoRequest {
 /// Tracking worker → page.
 #[derive(Debug, Clone, PartialEq)]
 pub enum VoReply {
-    /// One frame done: the estimated and true camera positions.
+    /// One frame done: the estimated and true camera positions, the loop's
+    /// counts, and the points it used (for the odometry's own view).
     Step {
         id: u32,
         frame: u32,
         total: u32,
         position: [f64; 3],
         truth: Option<[f64; 3]>,
-        tracked: u32,
-        redetected: bool,
+        counts: StepCounts,
+        detail: Option<Box<StepDetail>>,
     },
     /// Sent just before `Done`: the run's metrics (`TrajectoryMetrics::to_array`,
     /// KITTI figures NaN when undefined).
@@ -48,6 +50,55 @@ pub enum VoReply {
     Done { id: u32, ate: f64, png: Vec<u8>, ms: f64, kitti: String },
     /// A user-facing message; the run is over.
     Failed { id: u32, message: String },
+}
+
+/// What one frame of the loop counted (`vo::StepResult`'s fields, as
+/// `view_trajectory --trace` writes them).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepCounts {
+    pub points_in: u32,
+    pub tracked: u32,
+    pub essential_inliers: u32,
+    pub pose_inliers: u32,
+    pub redetected: bool,
+}
+
+impl StepCounts {
+    pub fn of(s: &siftlab_core::vo::StepResult) -> StepCounts {
+        StepCounts {
+            points_in: s.points_in as u32,
+            tracked: s.tracked as u32,
+            essential_inliers: s.essential_inliers as u32,
+            pose_inliers: s.pose_inliers as u32,
+            redetected: s.redetected,
+        }
+    }
+}
+
+/// The detail's masks in one byte per point: bit 0 RANSAC's, bit 1 recoverPose's.
+fn set_detail(o: &Object, d: &StepDetail) {
+    set(o, "dPrev", &points_js(&d.prev));
+    set(o, "dCur", &points_js(&d.cur));
+    let masks: Vec<u8> =
+        d.essential_mask.iter().zip(&d.pose_mask).map(|(&e, &p)| u8::from(e) | (u8::from(p) << 1)).collect();
+    set(o, "dMask", &Uint8Array::from(masks.as_slice()).into());
+    set(o, "dDetected", &points_js(&d.detected));
+}
+
+fn get_detail(v: &JsValue) -> Result<Option<Box<StepDetail>>, String> {
+    let Some(prev) = get_points(v, "dPrev")? else { return Ok(None) };
+    let cur = get_points(v, "dCur")?.unwrap_or_default();
+    let masks = get_bytes(v, "dMask")?;
+    if cur.len() != prev.len() || masks.len() != prev.len() {
+        return Err(format!("voStep detail: {} / {} / {} points", prev.len(), cur.len(), masks.len()));
+    }
+    Ok(Some(Box::new(StepDetail {
+        prev,
+        cur,
+        essential_mask: masks.iter().map(|m| m & 1 != 0).collect(),
+        pose_mask: masks.iter().map(|m| m & 2 != 0).collect(),
+        detected: get_points(v, "dDetected")?.unwrap_or_default(),
+    })))
 }
 
 impl VoRequest {
@@ -116,15 +167,21 @@ impl VoReply {
     pub fn to_js(&self) -> JsValue {
         let o = Object::new();
         match self {
-            VoReply::Step { id, frame, total, position, truth, tracked, redetected } => {
+            VoReply::Step { id, frame, total, position, truth, counts, detail } => {
                 set(&o, "type", &"voStep".into());
                 set(&o, "id", &(*id).into());
                 set(&o, "frame", &(*frame).into());
                 set(&o, "total", &(*total).into());
                 set(&o, "position", &vec3(position));
                 set(&o, "truth", &truth.as_ref().map(vec3).unwrap_or(JsValue::NULL));
-                set(&o, "tracked", &(*tracked).into());
-                set(&o, "redetected", &(*redetected).into());
+                set(&o, "pointsIn", &counts.points_in.into());
+                set(&o, "tracked", &counts.tracked.into());
+                set(&o, "essentialInliers", &counts.essential_inliers.into());
+                set(&o, "poseInliers", &counts.pose_inliers.into());
+                set(&o, "redetected", &counts.redetected.into());
+                if let Some(d) = detail {
+                    set_detail(&o, d);
+                }
             }
             VoReply::Metrics { id, metrics } => {
                 set(&o, "type", &"voMetrics".into());
@@ -154,8 +211,14 @@ impl VoReply {
                 total: get_u32(v, "total")?,
                 position: get_vec3(v, "position")?.ok_or("voStep without a position")?,
                 truth: get_vec3(v, "truth")?,
-                tracked: get_u32(v, "tracked")?,
-                redetected: get(v, "redetected")?.as_bool().unwrap_or(false),
+                counts: StepCounts {
+                    points_in: get_u32(v, "pointsIn")?,
+                    tracked: get_u32(v, "tracked")?,
+                    essential_inliers: get_u32(v, "essentialInliers")?,
+                    pose_inliers: get_u32(v, "poseInliers")?,
+                    redetected: get(v, "redetected")?.as_bool().unwrap_or(false),
+                },
+                detail: get_detail(v)?,
             }),
             "voMetrics" => {
                 let a = get(v, "metrics")?

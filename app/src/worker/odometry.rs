@@ -2,7 +2,7 @@
 //! driven by a strategy's matches), one frame per request, in frame order.
 
 use crate::platform::now_ms;
-use crate::protocol::odometry::{VoReply, VoRequest};
+use crate::protocol::odometry::{StepCounts, VoReply, VoRequest};
 use siftlab_core::GrayImage;
 
 /// Handles one request of the worker's odometry run, posting its steps, its
@@ -92,14 +92,18 @@ impl VoSession {
                 total
             ));
         }
-        let odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
+        let mut odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
+        // The page draws each frame's points (the odometry's own view).
+        odo.record_detail = true;
         Ok(VoSession { id, total, poses, odo, matched: None, rows: Vec::new(), est: Vec::new(), truth: Vec::new(), t0 })
     }
 
     /// The same session tracking with `strategy`'s matches instead of LK.
     fn with_matcher(mut self, strategy: siftlab_core::matching::Strategy) -> Result<Self, String> {
         use siftlab_core::vo::{Camera, MatchedOdometry};
-        self.matched = Some(MatchedOdometry::new(Camera::default(), strategy).map_err(|e| e.to_string())?);
+        let mut m = MatchedOdometry::new(Camera::default(), strategy).map_err(|e| e.to_string())?;
+        m.record_detail = true;
+        self.matched = Some(m);
         Ok(self)
     }
 
@@ -125,6 +129,8 @@ impl VoSession {
             }
         }
         .map_err(|e| e.to_string())?;
+        let mut step = step;
+        let detail = step.detail.take();
         self.rows.push(siftlab_core::vo::pose_row(&step.rotation, &step.position));
         let gt = step.gt_position.or_else(|| self.poses.get(i).map(position));
         self.est.push(step.position);
@@ -137,8 +143,8 @@ impl VoSession {
             total: self.total as u32,
             position: step.position,
             truth: gt,
-            tracked: step.tracked as u32,
-            redetected: step.redetected,
+            counts: StepCounts::of(&step),
+            detail,
         });
         if i + 1 == self.total {
             let ate = ate_rmse(&self.est, &self.truth).map_err(|e| e.to_string())?;

@@ -16,7 +16,7 @@
 //! the query set of the next.
 
 use super::linalg::{Mat3, Vec3, IDENTITY};
-use super::odometry::{apply_motion, lab_scale, StepResult};
+use super::odometry::{apply_motion, lab_scale, StepDetail, StepResult};
 use super::ransac::{find_essential_mat, RansacParams};
 use super::recover_pose::recover_pose;
 use crate::camera::Camera;
@@ -38,6 +38,8 @@ pub struct MatchedOdometry {
     r: Mat3,
     t: Vec3,
     prev_gt: Option<PoseRow>,
+    /// Fill [`StepResult::detail`] with the matched points (off by default).
+    pub record_detail: bool,
 }
 
 /// Matched pixel positions: (previous frame, current frame).
@@ -68,6 +70,7 @@ impl MatchedOdometry {
             r: IDENTITY,
             t: [0.0; 3],
             prev_gt: None,
+            record_detail: false,
         })
     }
 
@@ -120,6 +123,15 @@ impl MatchedOdometry {
             res.essential_inliers = ess.inliers;
             res.ransac_iterations = ess.iterations;
             res.pose_inliers = pose.inliers;
+            if self.record_detail {
+                res.detail = Some(Box::new(StepDetail {
+                    prev: refs.clone(),
+                    cur: curs.clone(),
+                    essential_mask: ess.mask.clone(),
+                    pose_mask: pose.mask.clone(),
+                    detected: Vec::new(),
+                }));
+            }
             match scale {
                 None => {
                     r = pose.r;
@@ -201,12 +213,15 @@ mod tests {
         Dataset::open(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI")).unwrap()
     }
 
-    /// tests/fixtures/vo_matched/NAME: the OpenCV loop's poses
-    /// (tests/scripts/vo_matched_reference.py --fixtures).
-    fn reference(name: &str) -> Vec<[f64; 3]> {
+    fn fixture(name: &str) -> String {
         let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/vo_matched").join(name);
-        std::fs::read_to_string(&p)
-            .unwrap()
+        std::fs::read_to_string(&p).unwrap()
+    }
+
+    /// tests/fixtures/vo_matched/NAME.txt: the OpenCV loop's positions
+    /// (tests/scripts/vo_matched_reference.py --fixtures: IPP off, 8 lanes).
+    fn reference(name: &str) -> Vec<[f64; 3]> {
+        fixture(&format!("{name}.txt"))
             .lines()
             .map(|l| {
                 let v: Vec<f64> = l.split(' ').map(|x| x.parse().unwrap()).collect();
@@ -215,32 +230,75 @@ mod tests {
             .collect()
     }
 
-    /// Frames 0–99 for each strategy against OpenCV, within 1e-6 m per frame,
-    /// but for dt from frame 96 on: there findEssentialMat's RANSAC keeps a
-    /// model with 838 inliers where OpenCV's has 837 (one point on the
-    /// threshold; E is exact to ~1e-13 only, docs/fidelity.md §VO-3.8 and
-    /// §VO-8), which moves frames 96–99 by 1.0e-3 m.
+    /// `"key": N` of one trace line (`true`/`false` as 1/0).
+    fn trace_value(line: &str, key: &str) -> usize {
+        let rest = &line[line.find(&format!("\"{key}\": ")).unwrap() + key.len() + 4..];
+        match &rest[..rest.find([',', '}']).unwrap()] {
+            "true" => 1,
+            "false" => 0,
+            v => v.parse().unwrap(),
+        }
+    }
+
+    /// Frames 0–150 for each strategy against OpenCV's loop, with SIFT at 8
+    /// lanes as the fixtures were written (each frame's SIFT once, for all
+    /// three): the per-frame counts equal OpenCV's trace, the positions are
+    /// within 1e-6 m per coordinate, but after two ill-conditioned RANSAC
+    /// samples (docs/fidelity.md §VO-3.8, §VO-8), where E is exact to far
+    /// less than its usual ~1e-13:
+    /// - dt 200, frame 96: siftlab's model has 838 inliers, OpenCV's 837
+    ///   (recoverPose 558 and 548), which moves frames 96–150 by 0.77 to
+    ///   3.2 mm (2.98e-3 m per coordinate at most, frame 150);
+    /// - nndr 0.8, frame 135: the same 543 inliers, but E differs by 3.2e-6,
+    ///   which moves frames 135–150 by up to 3.4e-6 m.
     #[test]
-    fn equals_opencv_on_frames_0_to_99() {
+    fn equals_opencv_on_frames_0_to_150() {
         let ds = dataset();
-        for (strategy, name, exact_until) in [
-            (Strategy::Dt(200.0), "dt_200.txt", 96),
-            (Strategy::Nn(None), "nn.txt", 100),
-            (Strategy::Nndr(0.8), "nndr_0.8.txt", 100),
-        ] {
+        let n = 151;
+        // (strategy, fixture, first frame past the exact range, bound after it)
+        let runs = [
+            (Strategy::Dt(200.0), "dt_200", 96, 4e-3),
+            (Strategy::Nn(None), "nn", n, 0.0),
+            (Strategy::Nndr(0.8), "nndr_0.8", 135, 1e-5),
+        ];
+        let mut odos: Vec<MatchedOdometry> =
+            runs.iter().map(|r| MatchedOdometry::new(Camera::default(), r.0).unwrap()).collect();
+        let mut got = vec![Vec::new(); runs.len()];
+        let params = SiftParams { opencv_lanes: 8, ..SiftParams::default() };
+        for i in 0..n {
+            let f = detect_and_compute(&ds.load_frame(i).unwrap(), &params);
+            for (odo, steps) in odos.iter_mut().zip(&mut got) {
+                steps.push(odo.step_features(f.clone(), ds.poses().get(i)).unwrap());
+            }
+        }
+        for ((_, name, exact_until, bound), got) in runs.iter().zip(&got) {
             let want = reference(name);
-            assert_eq!(want.len(), 100);
-            let mut odo = MatchedOdometry::new(Camera::default(), strategy).unwrap();
-            let got = run_matched(&mut odo, 100, ds.poses(), |i| ds.load_frame(i), &mut |_, _| {}).unwrap();
+            assert_eq!(want.len(), n);
             let diff: Vec<f64> = got
                 .iter()
                 .zip(&want)
                 .map(|(g, w)| (0..3).map(|k| (g.position[k] - w[k]).abs()).fold(0.0, f64::max))
                 .collect();
-            let worst = diff[..exact_until].iter().copied().fold(0.0, f64::max);
+            let worst = diff[..*exact_until].iter().copied().fold(0.0, f64::max);
             assert!(worst <= 1e-6, "{name}: worst difference {worst} m on frames 0-{}", exact_until - 1);
-            assert!(diff[exact_until..].iter().all(|&d| d <= 2e-3), "{name}: {:?}", &diff[exact_until..]);
-            assert!(got[1..].iter().all(|s| s.tracked >= 600 && s.redetected), "{name}");
+            assert!(diff[*exact_until..].iter().all(|&d| d <= *bound), "{name}: {:?}", &diff[*exact_until..]);
+            assert!(got[1..].iter().all(|s| s.tracked >= 500 && s.redetected), "{name}");
+
+            // The trace: OpenCV's counts, frame by frame (the names are vo::StepResult's).
+            let trace = fixture(&format!("{name}.trace.jsonl"));
+            let lines: Vec<&str> = trace.lines().collect();
+            assert_eq!(lines.len(), n);
+            for (s, line) in got.iter().zip(&lines) {
+                let ours = [s.frame, s.points_in, s.tracked, s.essential_inliers, s.pose_inliers, s.redetected as usize];
+                let theirs = ["frame", "points_in", "tracked", "essential_inliers", "pose_inliers", "redetected"]
+                    .map(|k| trace_value(line, k));
+                if (*name, s.frame) == ("dt_200", 96) {
+                    assert_eq!((ours[4], ours[5], theirs[4], theirs[5]), (838, 558, 837, 548), "{line}");
+                    assert_eq!(ours[..4], theirs[..4]);
+                } else {
+                    assert_eq!(ours, theirs, "{name} frame {}: siftlab vs OpenCV {line}", s.frame);
+                }
+            }
         }
     }
 

@@ -54,6 +54,25 @@ pub struct StepResult {
     pub redetected: bool,
     /// Points carried to the next frame.
     pub points_out: usize,
+    /// The points themselves, when the loop was asked to record them
+    /// ([`Odometry::record_detail`]): what the app draws on the frame.
+    pub detail: Option<Box<StepDetail>>,
+}
+
+/// One frame's points, as the loop used them: each tracked (or matched)
+/// point where it was in the previous frame and where it is in this one
+/// (the `points2`, `points1` of findEssentialMat), whether RANSAC kept it
+/// (findEssentialMat's mask) and whether recoverPose counted it (its mask:
+/// in front of both cameras), and the points re-detected on this frame.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StepDetail {
+    pub prev: Vec<[f32; 2]>,
+    pub cur: Vec<[f32; 2]>,
+    pub essential_mask: Vec<bool>,
+    pub pose_mask: Vec<bool>,
+    /// The detector's points on this frame when the loop re-detected (frame 0
+    /// included); empty otherwise.
+    pub detected: Vec<[f32; 2]>,
 }
 
 impl StepResult {
@@ -73,6 +92,7 @@ impl StepResult {
             updated: false,
             redetected: false,
             points_out: 0,
+            detail: None,
         }
     }
 }
@@ -117,6 +137,9 @@ pub struct Odometry {
     r: Mat3,
     t: Vec3,
     prev_gt: Option<PoseRow>,
+    /// Fill [`StepResult::detail`] (off by default: a long run would keep
+    /// every frame's points).
+    pub record_detail: bool,
 }
 
 impl Odometry {
@@ -141,6 +164,7 @@ impl Odometry {
             r: IDENTITY,
             t: [0.0; 3],
             prev_gt: None,
+            record_detail: false,
         })
     }
 
@@ -208,6 +232,9 @@ impl Odometry {
             };
             res.redetected = true;
             res.points_out = refs.len();
+            if self.record_detail {
+                res.detail = Some(Box::new(StepDetail { detected: refs.clone(), ..StepDetail::default() }));
+            }
             self.refs = refs;
             self.last = Some(((img.width(), img.height()), Pyramid::new(img, self.lk.max_level)));
             self.prev_gt = gt.copied();
@@ -252,6 +279,15 @@ impl Odometry {
         res.essential_inliers = ess.inliers;
         res.ransac_iterations = ess.iterations;
         res.pose_inliers = pose.inliers;
+        let mut detail = self.record_detail.then(|| {
+            Box::new(StepDetail {
+                prev: refs.clone(),
+                cur: cur.clone(),
+                essential_mask: ess.mask.clone(),
+                pose_mask: pose.mask.clone(),
+                detected: Vec::new(),
+            })
+        });
 
         let (mut r, mut t) = (self.r, self.t);
         let mut next_refs = cur;
@@ -273,9 +309,13 @@ impl Odometry {
                         None => (self.detector)(img),
                     };
                     res.redetected = true;
+                    if let Some(d) = &mut detail {
+                        d.detected = next_refs.clone();
+                    }
                 }
             }
         }
+        res.detail = detail;
         self.r = r;
         self.t = t;
         res.rotation = r;
@@ -492,6 +532,31 @@ mod tests {
         assert!(r3.updated);
         let moved: f64 = (0..3).map(|k| (r3.position[k] - r2.position[k]).powi(2)).sum::<f64>().sqrt();
         assert!((moved - 2.0).abs() < 1e-9, "moved {moved}");
+    }
+
+    /// The recorded points are the ones the counts count, and recording
+    /// changes nothing else.
+    #[test]
+    fn detail_matches_the_counts() {
+        let cam = Camera { fx: 300.0, fy: 300.0, cx: 160.0, cy: 120.0 };
+        let (mut plain, mut rec) =
+            (Odometry::with_detector(cam, Box::new(grid)).unwrap(), Odometry::with_detector(cam, Box::new(grid)).unwrap());
+        plain.min_points = 10_000;
+        rec.min_points = 10_000;
+        rec.record_detail = true;
+        for k in 0..4 {
+            let img = frame(320, 240, 1.0 + 0.02 * k as f64, &cam);
+            let a = plain.step(&img, Some(&gt(k as f64))).unwrap();
+            let mut b = rec.step(&img, Some(&gt(k as f64))).unwrap();
+            let d = b.detail.take().expect("recorded");
+            assert_eq!(a, b, "frame {k}");
+            let count = |m: &[bool]| m.iter().filter(|&&x| x).count();
+            assert_eq!((d.prev.len(), d.cur.len()), (a.tracked, a.tracked));
+            assert_eq!(count(&d.essential_mask), a.essential_inliers);
+            assert_eq!(count(&d.pose_mask), a.pose_inliers);
+            assert_eq!(d.detected.len(), if a.redetected { a.points_out } else { 0 });
+            assert!(d.pose_mask.iter().zip(&d.essential_mask).all(|(&p, &e)| !p || e), "recoverPose counts RANSAC inliers only");
+        }
     }
 
     #[test]

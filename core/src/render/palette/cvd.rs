@@ -130,6 +130,10 @@ fn meaningful_pairs() -> Vec<(String, Color, String, Color)> {
         ("edge", DROPS[3]),
     ];
     pairs.extend(named(&anatomy));
+    // The odometry's own view: inliers, outliers and re-detections on a frame.
+    pairs.extend(named(&[("inlier", INLIER), ("outlier", OUTLIER), ("re-detected", REDETECTED)]));
+    // The whole-frame view's picked match and its epipolar line against the rest.
+    pairs.extend(named(&[("picked", PICKED), ("correct ", CORRECT), ("wrong ", WRONG)]));
     pairs
 }
 

@@ -149,6 +149,20 @@ pub const WRONG: Style = style(VERMILLION, &[8.0, 5.0], Marker::Cross);
 /// Matches of a pair without ground truth (never shown beside the other two).
 pub const UNJUDGED: Style = style(YELLOW, SOLID, Marker::Circle);
 
+/// The odometry's own view, over the camera frame: each point's flow from
+/// the previous frame, solid with a circle where findEssentialMat's RANSAC
+/// kept it, dashed with a cross where it did not (the whole-frame view's
+/// correct and wrong, as the same idea: consistent with one motion or not),
+/// and the points the loop re-detected on this frame as small diamonds.
+pub const INLIER: Style = style(SKY_BLUE, SOLID, Marker::Circle);
+pub const OUTLIER: Style = style(VERMILLION, &[4.0, 3.0], Marker::Cross);
+pub const REDETECTED: Style = style(YELLOW, SOLID, Marker::Diamond);
+
+/// The whole-frame view's picked match (drawn over the others) and its
+/// epipolar line in the current frame: yellow, the line dashed.
+pub const PICKED: Style = style(YELLOW, SOLID, Marker::Square);
+pub const EPIPOLAR: Style = style(YELLOW, &[10.0, 6.0], Marker::None);
+
 /// The ground-truth trajectory: black and solid, the one line without dashes.
 pub const TRUTH: Style = style(BLACK, SOLID, Marker::None);
 /// The odometry's trackers in the comparison's order, LK, dt, nn, nndr: four
@@ -243,8 +257,14 @@ mod tests {
     /// from every other in dash or marker (both, for the trackers).
     #[test]
     fn every_set_differs_in_more_than_hue() {
-        let sets: [&[Style]; 3] =
-            [&[CORRECT, WRONG], &[TRUTH, TRACKERS[0], TRACKERS[1], TRACKERS[2], TRACKERS[3]], &DROPS];
+        let sets: [&[Style]; 6] = [
+            &[CORRECT, WRONG],
+            &[TRUTH, TRACKERS[0], TRACKERS[1], TRACKERS[2], TRACKERS[3]],
+            &DROPS,
+            &[INLIER, OUTLIER, REDETECTED],
+            &[PICKED, CORRECT, WRONG],
+            &[PICKED, EPIPOLAR],
+        ];
         for set in sets {
             for (i, a) in set.iter().enumerate() {
                 for b in &set[i + 1..] {
