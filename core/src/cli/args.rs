@@ -122,9 +122,13 @@ pub struct MatchAllArgs {
     /// A match is correct when its Sampson distance to the true epipolar geometry is at most this (pixels).
     #[arg(long = "epipolar-px", default_value_t = 2.0, allow_negative_numbers = true)]
     pub epipolar_px: f64,
-    /// Print the counts as JSON.
+    /// Print the counts and every match (query, train, distance, Sampson distance, verdict) as JSON.
     #[arg(long)]
     pub json: bool,
+    /// matches.png: `flow` draws each match on the current frame from where its point was to where it is;
+    /// `side` both frames side by side with a line per match.
+    #[arg(long, value_parser = ["flow", "side"], default_value = "flow")]
+    pub layout: String,
     /// The current frame (>= 1); frame FRAME_ID-1 is the previous one.
     #[arg(allow_negative_numbers = true)]
     pub frame_id: String,

@@ -72,16 +72,32 @@ pub fn sampson_of(fa: &Vector3<f64>, ftb: &Vector3<f64>, b: &Vector3<f64>) -> f6
     num / den
 }
 
-/// Whether each match (query in `prev`, train in `cur`) lies within `px`
-/// pixels of its epipolar geometry.
-pub fn judge(f: &Matrix3<f64>, prev: &[KeyPoint], cur: &[KeyPoint], matches: &[DMatch], px: f64) -> Vec<bool> {
+/// The epipolar line of x₁ (a pixel of the previous frame) in the current
+/// frame: l = F·x₁ as [a, b, c], the points with a·x + b·y + c = 0. Where x₁
+/// is seen again must lie on it; the Sampson distance measures how far off
+/// a match is from this line (and from x₁'s counterpart on Fᵀx₂) together.
+pub fn epipolar_line(f: &Matrix3<f64>, x1: [f32; 2]) -> [f64; 3] {
+    let l = f * homogeneous(x1);
+    [l[0], l[1], l[2]]
+}
+
+/// The Sampson distance of each match (query in `prev`, train in `cur`), in
+/// the order of `matches`: [`sampson`] of its two keypoints, the same bits.
+/// Panics when a match names a keypoint the frames do not have.
+pub fn sampsons(f: &Matrix3<f64>, prev: &[KeyPoint], cur: &[KeyPoint], matches: &[DMatch]) -> Vec<f64> {
     matches
         .iter()
         .map(|m| {
             let (a, b) = (&prev[m.query_idx], &cur[m.train_idx]);
-            sampson(f, [a.x, a.y], [b.x, b.y]) <= px
+            sampson(f, [a.x, a.y], [b.x, b.y])
         })
         .collect()
+}
+
+/// Whether each match (query in `prev`, train in `cur`) lies within `px`
+/// pixels of its epipolar geometry: [`sampsons`] ≤ `px`.
+pub fn judge(f: &Matrix3<f64>, prev: &[KeyPoint], cur: &[KeyPoint], matches: &[DMatch], px: f64) -> Vec<bool> {
+    sampsons(f, prev, cur, matches).into_iter().map(|s| s <= px).collect()
 }
 
 /// Counts of a whole-frame match set.
@@ -152,6 +168,36 @@ mod tests {
             let d = sampson(&f, [prev[q].x, prev[q].y], [cur[40 + q].x, cur[40 + q].y]);
             assert!(d > 5.0 && d < 20.0, "{d}");
         }
+    }
+
+    /// A pure sideways move (x to the right, no turn): F = K⁻ᵀ[t]ₓK⁻¹ makes
+    /// every epipolar line the image row of x₁, so l = (0, b, −b·y₁) up to
+    /// scale, and a point on it has Sampson distance 0 while one d rows
+    /// away has |d|/√2 (the two gradient terms are equal).
+    #[test]
+    fn epipolar_lines_and_sampsons_of_a_sideways_move() {
+        let cam = Camera::default();
+        let f = fundamental(&pose(0.0, [0.0, 0.0, 0.0]), &pose(0.0, [0.5, 0.0, 0.0]), &cam).unwrap();
+        let x1 = [300.0f32, 120.0];
+        let [a, b, c] = epipolar_line(&f, x1);
+        assert!(a.abs() < 1e-12 * b.abs(), "{a} {b}");
+        assert!((c / b + 120.0).abs() < 1e-9, "the line is y = 120: {}", -c / b);
+        // The line is F·x₁: a point on it satisfies x₂ᵀ F x₁ = 0.
+        let on = [700.0f32, 120.0];
+        assert!((a * 700.0 + b * 120.0 + c).abs() < 1e-12);
+        let kp = |p: [f32; 2]| KeyPoint { x: p[0], y: p[1], size: 2.0, angle: 0.0, response: 0.0, octave: 0 };
+        let (prev, cur) = (vec![kp(x1)], vec![kp(on), kp([700.0, 124.0]), kp([10.0, 117.0])]);
+        let m = |t| DMatch { query_idx: 0, train_idx: t, distance: 0.0 };
+        let s = sampsons(&f, &prev, &cur, &[m(0), m(1), m(2)]);
+        assert!(s[0] < 1e-9, "{}", s[0]);
+        assert!((s[1] - 4.0 / 2f64.sqrt()).abs() < 1e-9, "{}", s[1]);
+        assert!((s[2] - 3.0 / 2f64.sqrt()).abs() < 1e-9, "{}", s[2]);
+        // The same bits as one at a time, and judge is sampsons ≤ px.
+        for (i, t) in [on, [700.0, 124.0], [10.0, 117.0]].into_iter().enumerate() {
+            assert_eq!(s[i].to_bits(), sampson(&f, x1, t).to_bits());
+        }
+        assert_eq!(judge(&f, &prev, &cur, &[m(0), m(1), m(2)], 2.2), vec![true, false, true]);
+        assert!(sampsons(&f, &prev, &cur, &[]).is_empty());
     }
 
     #[test]

@@ -1,7 +1,9 @@
 //! The images the lab's commands draw, reproduced with the `image` crate only:
 //! `cv2.drawMatchesKnn(..., flags=2)` for `view_feature` ([`matches`](mod@matches)), the
 //! `view_info` composite ([`info`]) and the `view_trajectory` window
-//! ([`trajectory`]). Everything here is plain Rust and runs on wasm too.
+//! ([`trajectory`]); and `match_all`'s whole-frame pictures, side by side
+//! ([`whole_frame`](mod@whole_frame)) or as flow over the current frame
+//! ([`flow`](mod@flow)). Everything here is plain Rust and runs on wasm too.
 //!
 //! The primitives in [`draw`] follow OpenCV 4.8's `imgproc/drawing.cpp`
 //! integer arithmetic, with the line type each lab call uses:
@@ -17,6 +19,7 @@
 // holds, also inside `unsafe fn`s (render has none today).
 
 pub(crate) mod draw;
+pub(crate) mod flow;
 pub(crate) mod font;
 pub(crate) mod info;
 pub(crate) mod matches;
@@ -29,6 +32,7 @@ pub(crate) mod trajectory;
 pub(crate) mod whole_frame;
 
 use crate::error::{Error, Result};
+pub use flow::draw as flow_frame;
 pub use image::RgbImage;
 pub use info::draw as view_info;
 pub use matches::draw_feature as view_feature;

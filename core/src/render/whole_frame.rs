@@ -20,22 +20,72 @@ fn fx(v: f64) -> i64 {
     (v * 16.0).round() as i64
 }
 
+/// The segment from `a` to `b` in the style's colour and dash (1 px, anti-aliased).
+pub(super) fn dashed_segment(out: &mut RgbImage, a: (f64, f64), b: (f64, f64), st: &Style) {
+    for (p, q) in segments(&[a, b], st.dash) {
+        line(out, (fx(p.0), fx(p.1)), (fx(q.0), fx(q.1)), Rgb(st.color), 1, true, 4);
+    }
+}
+
+/// The style's marker at `e`: a circle of radius `r`, or a cross of radius
+/// `r + 1` ([`Marker::cross`]: strokes ±0.75·(r + 1) on each axis), the pair
+/// whole_frame has always drawn at r = 3.
+pub(super) fn end_marker(out: &mut RgbImage, e: (f64, f64), st: &Style, r: f64) {
+    let c = Rgb(st.color);
+    match st.marker {
+        Marker::Cross => {
+            for (p, q) in Marker::cross(e, r + 1.0) {
+                line(out, (fx(p.0), fx(p.1)), (fx(q.0), fx(q.1)), c, 1, true, 4);
+            }
+        }
+        _ => circle(out, (fx(e.0), fx(e.1)), fx(r), c, 1, true, 4),
+    }
+}
+
 /// One match: its line with the style's dash and a marker of radius 3 at each end.
 fn draw_match(out: &mut RgbImage, a: (f64, f64), b: (f64, f64), st: &Style) {
-    let c = Rgb(st.color);
-    for (p, q) in segments(&[a, b], st.dash) {
-        line(out, (fx(p.0), fx(p.1)), (fx(q.0), fx(q.1)), c, 1, true, 4);
-    }
+    dashed_segment(out, a, b, st);
     for e in [a, b] {
-        match st.marker {
-            Marker::Cross => {
-                for (p, q) in Marker::cross(e, 4.0) {
-                    line(out, (fx(p.0), fx(p.1)), (fx(q.0), fx(q.1)), c, 1, true, 4);
-                }
-            }
-            _ => circle(out, (fx(e.0), fx(e.1)), 3 * 16, c, 1, true, 4),
-        }
+        end_marker(out, e, st, 3.0);
     }
+}
+
+/// The matches in drawing order with their styles and keypoints: correct
+/// (or unjudged) first, wrong last, each as (index, style, query keypoint,
+/// train keypoint). Errors when the verdicts are not one per match or a
+/// match names a keypoint the frames do not have.
+pub(super) fn styled<'k>(
+    prev: &'k [KeyPoint],
+    cur: &'k [KeyPoint],
+    matches: &[DMatch],
+    verdicts: Option<&[bool]>,
+) -> Result<Vec<(usize, Style, &'k KeyPoint, &'k KeyPoint)>> {
+    if verdicts.is_some_and(|v| v.len() != matches.len()) {
+        return Err(Error::InvalidArgument("one verdict per match is needed".into()));
+    }
+    let style = |i: usize| match verdicts {
+        None => UNJUDGED,
+        Some(v) if v[i] => CORRECT,
+        Some(_) => WRONG,
+    };
+    let mut order: Vec<usize> = (0..matches.len()).collect();
+    order.sort_by_key(|&i| verdicts.is_none_or(|v| !v[i]));
+    order
+        .into_iter()
+        .map(|i| {
+            let m = matches[i];
+            match (prev.get(m.query_idx), cur.get(m.train_idx)) {
+                (Some(a), Some(b)) => Ok((i, style(i), a, b)),
+                _ => Err(Error::InvalidArgument(format!(
+                    "match {i} names keypoints {} / {} but the frames have {} / {}",
+                    m.query_idx,
+                    m.train_idx,
+                    prev.len(),
+                    cur.len()
+                ))),
+            }
+        })
+        .collect()
 }
 
 /// Draws `matches` (query in `prev`, train in `cur`); `verdicts[i]` says
@@ -55,29 +105,9 @@ pub fn draw(
     let mut out = RgbImage::new(w1 + w2, h);
     image::imageops::replace(&mut out, &super::gray_to_rgb(prev_image), 0, 0);
     image::imageops::replace(&mut out, &super::gray_to_rgb(cur_image), w1 as i64, 0);
-    if verdicts.is_some_and(|v| v.len() != matches.len()) {
-        return Err(Error::InvalidArgument("one verdict per match is needed".into()));
-    }
-    let style = |i: usize| match verdicts {
-        None => UNJUDGED,
-        Some(v) if v[i] => CORRECT,
-        Some(_) => WRONG,
-    };
-    let mut order: Vec<usize> = (0..matches.len()).collect();
-    order.sort_by_key(|&i| verdicts.is_none_or(|v| !v[i]));
-    for i in order {
-        let m = matches[i];
-        let (Some(a), Some(b)) = (prev.get(m.query_idx), cur.get(m.train_idx)) else {
-            return Err(Error::InvalidArgument(format!(
-                "match {i} names keypoints {} / {} but the frames have {} / {}",
-                m.query_idx,
-                m.train_idx,
-                prev.len(),
-                cur.len()
-            )));
-        };
+    for (_, st, a, b) in styled(prev, cur, matches, verdicts)? {
         let (pa, pb) = ((a.x as f64, a.y as f64), (b.x as f64 + w1 as f64, b.y as f64));
-        draw_match(&mut out, pa, pb, &style(i));
+        draw_match(&mut out, pa, pb, &st);
     }
     Ok(out)
 }
