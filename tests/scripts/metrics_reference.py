@@ -11,12 +11,15 @@
                       last = first frame with dist > dist[first] + len,
                       E = (S_first^-1 S_last)^-1 (G_first^-1 G_last); mean |t(E)|/len (x100) and
                       angle(E)/len (deg per 100 m); null when no segment fits
+  kitti_segments      how many (first, length) segments those means are over (0: none fits)
 
     python3 metrics_reference.py [--out tests/fixtures/metrics/reference.json]
 
-Cases: the three committed matcher-driven OpenCV trajectories (tests/fixtures/vo_matched/, frames
-0-99, true path 84 m: KITTI null) and "drift_300": the truth of frames 0-299 (252 m) times a
-made-up drift P_i = [Ry(0.002 i) | (0.01 i, -0.005 i, 0.03 i)], which has KITTI segments. Needs numpy.
+Cases: the committed OpenCV trajectories on frames 0-150 (true path 110 m, so only a few 100 m
+KITTI segments fit: the count says how many): "lk" (the lab's LK loop, tests/fixtures/vo_lk/) and
+the three matcher-driven runs (tests/fixtures/vo_matched/); and "drift_300": the truth of frames
+0-299 (252 m) times a made-up drift P_i = [Ry(0.002 i) | (0.01 i, -0.005 i, 0.03 i)], which has
+segments of 100 and 200 m. Needs numpy.
 """
 import argparse
 import json
@@ -79,6 +82,7 @@ def metrics(s, g):
         "rpe_rot_rmse_deg": float(np.degrees(np.sqrt(np.mean(np.square(re))))),
         "kitti_t_err_pct": float(100 * np.mean(kt)) if kt else None,
         "kitti_r_err_deg_per_100m": float(np.degrees(np.mean(kr)) * 100) if kr else None,
+        "kitti_segments": len(kt),
     }
 
 
@@ -99,8 +103,10 @@ def main():
     a = ap.parse_args()
     poses = os.path.join(REPO, "www", "demo", "MyKITTI", "poses", "00.txt")
     cases = {}
-    for name in ("dt_200", "nn", "nndr_0.8"):
-        s = load_rows(os.path.join(REPO, "tests", "fixtures", "vo_matched", name + ".txt"))
+    runs = [("lk", os.path.join("vo_lk", "poses.txt"))] + \
+        [(name, os.path.join("vo_matched", name + ".txt")) for name in ("dt_200", "nn", "nndr_0.8")]
+    for name, rel in runs:
+        s = load_rows(os.path.join(REPO, "tests", "fixtures", rel))
         cases[name] = metrics(s, load_rows(poses, len(s)))
     g = load_rows(poses, 300)
     cases["drift_300"] = metrics(drift(g), g)

@@ -96,6 +96,10 @@ pub struct TrajectoryArgs {
     /// Write the trajectory and error plot with axes (.png or .svg).
     #[arg(long = "plot")]
     pub plot: Option<PathBuf>,
+    /// Write one JSON object per frame (JSON Lines): frame, points_in, tracked,
+    /// essential_inliers, pose_inliers, redetected.
+    #[arg(long = "trace")]
+    pub trace: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

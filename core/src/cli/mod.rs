@@ -106,6 +106,8 @@ pub fn run(cli: &Cli) -> Result<()> {
                 save_poses_tum: a.save_poses_tum.as_deref(),
                 metrics: a.metrics.as_deref(),
                 plot: a.plot.as_deref(),
+                trace: a.trace.as_deref(),
+                sift: Some(sift_params(cli)),
             };
             let result = trajectory::view_trajectory(&root, &opts, &a.output, &mut progress);
             if open && result.is_err() {

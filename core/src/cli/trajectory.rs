@@ -1,21 +1,26 @@
 //! `siftlab [-d DATASET] view_trajectory [-a ALGO [-t T]] [FRAME_ID] [--save-poses FILE]
-//! [--save-poses-tum FILE] [--metrics FILE] [--plot FILE]`: the lab's visual odometry over
-//! frames 0..=FRAME_ID of a MyKITTI folder (Lucas–Kanade, or with `-a` the
+//! [--save-poses-tum FILE] [--metrics FILE] [--plot FILE] [--trace FILE]`: the lab's visual
+//! odometry over frames 0..=FRAME_ID of a MyKITTI folder (Lucas–Kanade, or with `-a` the
 //! student's matcher: `vo::matched`), the lab's window `trajectory.png` (truth
 //! green, estimate red), the final position with the trajectory error, and on
-//! request the poses, the metrics as JSON and a plot with axes (PNG or SVG).
+//! request the poses, the metrics as JSON, a plot with axes (PNG or SVG) and
+//! the per-frame counts as JSON Lines.
 
 use crate::dataset::Dataset;
+use crate::dataset::PoseRow;
 use crate::error::{Error, Result};
+use crate::image::GrayImage;
 use crate::matching::Strategy;
 use crate::render::plot::figures::{report_figure, run_style, Run};
 use crate::render::plot::{raster::rasterize, svg::to_svg};
+use crate::sift::{detect_and_compute, Features, SiftParams};
 use crate::vo::export::{kitti_text, tum_text};
-use crate::vo::matched::{run_matched, MatchedOdometry};
-use crate::vo::metrics::{ate_rmse, evaluate, TrajectoryMetrics};
-use crate::vo::odometry::{pose_row, run};
+use crate::vo::matched::MatchedOdometry;
+use crate::vo::metrics::{ate_rmse, describe_kitti_segments, evaluate, kitti_segments, TrajectoryMetrics};
+use crate::vo::odometry::{pose_row, run, sift_detector};
 use crate::vo::{Camera, Odometry, StepResult};
 use std::fmt::Write as _;
+use std::io::Write as _;
 use std::path::Path;
 
 /// What `view_trajectory` runs and writes.
@@ -34,6 +39,32 @@ pub struct Options<'a> {
     pub metrics: Option<&'a Path>,
     /// The trajectory and error plot, PNG or SVG by extension.
     pub plot: Option<&'a Path>,
+    /// The per-frame counts as JSON Lines ([`trace_jsonl`]).
+    pub trace: Option<&'a Path>,
+    /// SIFT's parameters (`--opencv-lanes`); `None`: the lab's, at the
+    /// width OpenCV would use on this CPU (`SiftParams::for_host`).
+    pub sift: Option<SiftParams>,
+}
+
+/// The fields of [`StepResult`] a trace holds, in its order: what
+/// `tests/scripts/vo_reference.py --trace` and `vo_matched_reference.py
+/// --trace` write for OpenCV's loops, so the files compare line by line.
+pub const TRACE_FIELDS: [&str; 6] =
+    ["frame", "points_in", "tracked", "essential_inliers", "pose_inliers", "redetected"];
+
+/// One JSON object per frame (JSON Lines), keys [`TRACE_FIELDS`], spaced as
+/// Python's `json.dumps`: `{"frame": 1, "points_in": 1500, ...}`.
+pub fn trace_jsonl(steps: &[StepResult]) -> String {
+    let mut out = String::new();
+    for s in steps {
+        let _ = writeln!(
+            out,
+            "{{\"frame\": {}, \"points_in\": {}, \"tracked\": {}, \"essential_inliers\": {}, \
+             \"pose_inliers\": {}, \"redetected\": {}}}",
+            s.frame, s.points_in, s.tracked, s.essential_inliers, s.pose_inliers, s.redetected
+        );
+    }
+    out
 }
 
 fn write(path: &Path, bytes: &[u8], what: &str) -> Result<()> {
@@ -52,6 +83,47 @@ fn plot_format(path: &Path) -> Result<bool> {
     }
 }
 
+/// Opens the trace file before the run, so a path that cannot be written
+/// fails at once rather than after every frame.
+fn open_trace(path: &Path) -> Result<std::fs::File> {
+    std::fs::File::create(path)
+        .map_err(|e| Error::Dataset(format!("cannot write the trace to {}: {e}", path.display())))
+}
+
+/// The matcher-driven loop of `vo::matched::run_matched` with the SIFT
+/// parameters the flags ask for: the next frame is read and its SIFT
+/// computed on another thread while this one matches the current pair.
+fn run_matched_with(
+    odo: &mut MatchedOdometry,
+    n: usize,
+    poses: &[PoseRow],
+    load: impl FnMut(usize) -> Result<GrayImage> + Send,
+    params: &SiftParams,
+    progress: &mut dyn FnMut(usize, usize),
+) -> Result<Vec<StepResult>> {
+    let mut out = Vec::with_capacity(n);
+    let mut load = load;
+    std::thread::scope(|s| -> Result<()> {
+        let (tx, rx) = std::sync::mpsc::sync_channel::<Result<Features>>(1);
+        s.spawn(move || {
+            for i in 0..n {
+                let f = load(i).map(|img| detect_and_compute(&img, params));
+                let failed = f.is_err();
+                if tx.send(f).is_err() || failed {
+                    break;
+                }
+            }
+        });
+        for i in 0..n {
+            let f = rx.recv().map_err(|_| Error::Odometry(format!("frame {i} could not be read")))??;
+            out.push(odo.step_features(f, poses.get(i))?);
+            progress(i + 1, n);
+        }
+        Ok(())
+    })?;
+    Ok(out)
+}
+
 /// Runs the VO on the first frames, writes `out_png` (the lab's window) and
 /// whatever `opts` asks for. Returns the text to print (on stderr) and the metrics.
 pub fn view_trajectory(
@@ -67,14 +139,16 @@ pub fn view_trajectory(
         return Err(Error::InvalidArgument("the trajectory needs at least one frame (frame 0)".into()));
     }
     ds.check_frames(n)?;
+    let mut trace = opts.trace.map(open_trace).transpose()?;
+    let params = opts.sift.clone().unwrap_or_else(SiftParams::for_host);
     let steps: Vec<StepResult> = match &opts.strategy {
         None => {
-            let mut odo = Odometry::new(Camera::default())?;
+            let mut odo = Odometry::with_detector(Camera::default(), sift_detector(params))?;
             run(&mut odo, n, ds.poses(), |i| ds.load_frame(i), progress)?
         }
         Some(s) => {
             let mut odo = MatchedOdometry::new(Camera::default(), *s)?;
-            run_matched(&mut odo, n, ds.poses(), |i| ds.load_frame(i), progress)?
+            run_matched_with(&mut odo, n, ds.poses(), |i| ds.load_frame(i), &params, progress)?
         }
     };
 
@@ -84,6 +158,7 @@ pub fn view_trajectory(
     let poses: Vec<_> = steps.iter().map(|s| (s.rotation, s.position)).collect();
     let rows: Vec<_> = poses.iter().map(|(r, t)| pose_row(r, t)).collect();
     let metrics = evaluate(&rows, &ds.poses()[..n])?;
+    let segments = kitti_segments(&ds.poses()[..n]);
 
     if let Some(path) = opts.save_poses {
         write(path, kitti_text(&poses).as_bytes(), "the poses")?;
@@ -92,7 +167,11 @@ pub fn view_trajectory(
         write(path, tum_text(&poses).as_bytes(), "the TUM poses")?;
     }
     if let Some(path) = opts.metrics {
-        write(path, (metrics.to_json() + "\n").as_bytes(), "the metrics")?;
+        write(path, (metrics.to_json_with_segments(segments.len()) + "\n").as_bytes(), "the metrics")?;
+    }
+    if let (Some(file), Some(path)) = (&mut trace, opts.trace) {
+        file.write_all(trace_jsonl(&steps).as_bytes())
+            .map_err(|e| Error::Dataset(format!("cannot write the trace to {}: {e}", path.display())))?;
     }
     if let (Some(path), Some(svg)) = (opts.plot, svg) {
         let (name, style) = run_style(opts.strategy.as_ref());
@@ -113,7 +192,11 @@ pub fn view_trajectory(
         p[0], p[1], p[2], g[0], g[1], g[2]
     );
     let _ = writeln!(out, "trajectory error (ATE RMSE, {n} frames): {ate:.4} m");
-    let _ = write!(out, "{} ({n} frames): {}", run_style(opts.strategy.as_ref()).0, metrics.summary());
+    // The summary is the app's line too (`TrajectoryMetrics::summary`); the
+    // segments the KITTI figures rest on follow on a line of their own.
+    let _ = writeln!(out, "{} ({n} frames): {}", run_style(opts.strategy.as_ref()).0, metrics.summary());
+    let path: f64 = gt.windows(2).map(|w| crate::dataset::dist3(&w[0], &w[1])).sum();
+    let _ = write!(out, "KITTI metric: {} (true path {path:.1} m)", describe_kitti_segments(&segments));
     Ok((out, metrics))
 }
 
@@ -190,8 +273,8 @@ mod tests {
         let frames = |n| Options { frames: Some(n), ..Options::default() };
         let e = view_trajectory(&fixture(), &frames(0), &png, &mut nop).unwrap_err().to_string();
         assert!(e.contains("at least one frame"), "{e}");
-        let e = view_trajectory(&fixture(), &frames(101), &png, &mut nop).unwrap_err().to_string();
-        assert!(e.contains("frames 0 to 100 are needed but") && e.contains("has frames 0 to 99 only"), "{e}");
+        let e = view_trajectory(&fixture(), &frames(152), &png, &mut nop).unwrap_err().to_string();
+        assert!(e.contains("frames 0 to 151 are needed but") && e.contains("has frames 0 to 150 only"), "{e}");
         let e = view_trajectory(Path::new("/nonexistent/MyKITTI"), &Options::default(), &png, &mut nop)
             .unwrap_err()
             .to_string();
@@ -200,6 +283,30 @@ mod tests {
         let bad = Options { plot: Some(plot), ..Options::default() };
         let e = view_trajectory(&fixture(), &bad, &png, &mut nop).unwrap_err().to_string();
         assert!(e.contains("--plot plot.jpg: the file name must end in .png or .svg"), "{e}");
+        // A trace that cannot be written fails before the run (no frame read).
+        let trace = Path::new("/nonexistent/dir/trace.jsonl");
+        let bad = Options { trace: Some(trace), ..Options::default() };
+        let e = view_trajectory(&fixture(), &bad, &png, &mut |_, _| panic!("ran")).unwrap_err().to_string();
+        assert!(e.starts_with("cannot write the trace to /nonexistent/dir/trace.jsonl: "), "{e}");
         assert!(!png.exists());
+    }
+
+    /// The trace's lines are Python's `json.dumps` of the same keys, so a
+    /// line equals the OpenCV scripts' line for the same counts.
+    #[test]
+    fn trace_lines_read_as_python_writes_them() {
+        let mut a = StepResult::start(0, None, crate::vo::IDENTITY);
+        a.redetected = true;
+        let mut b = StepResult::start(7, None, crate::vo::IDENTITY);
+        (b.points_in, b.tracked, b.essential_inliers, b.pose_inliers) = (1502, 1467, 1423, 1022);
+        assert_eq!(
+            trace_jsonl(&[a, b.clone()]),
+            "{\"frame\": 0, \"points_in\": 0, \"tracked\": 0, \"essential_inliers\": 0, \"pose_inliers\": 0, \
+             \"redetected\": true}\n{\"frame\": 7, \"points_in\": 1502, \"tracked\": 1467, \"essential_inliers\": \
+             1423, \"pose_inliers\": 1022, \"redetected\": false}\n"
+        );
+        let one = trace_jsonl(&[b]);
+        let keys: Vec<&str> = one.split('"').skip(1).step_by(2).collect();
+        assert_eq!(keys, TRACE_FIELDS);
     }
 }

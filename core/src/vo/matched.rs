@@ -265,12 +265,21 @@ mod tests {
             runs.iter().map(|r| MatchedOdometry::new(Camera::default(), r.0).unwrap()).collect();
         let mut got = vec![Vec::new(); runs.len()];
         let params = SiftParams { opencv_lanes: 8, ..SiftParams::default() };
-        for i in 0..n {
-            let f = detect_and_compute(&ds.load_frame(i).unwrap(), &params);
-            for (odo, steps) in odos.iter_mut().zip(&mut got) {
-                steps.push(odo.step_features(f.clone(), ds.poses().get(i)).unwrap());
+        // SIFT of the next frame on another thread while this one matches.
+        std::thread::scope(|scope| {
+            let (tx, rx) = std::sync::mpsc::sync_channel(1);
+            let ds = &ds;
+            scope.spawn(move || {
+                for i in 0..n {
+                    tx.send(detect_and_compute(&ds.load_frame(i).unwrap(), &params)).unwrap();
+                }
+            });
+            for (i, f) in rx.iter().enumerate() {
+                for (odo, steps) in odos.iter_mut().zip(&mut got) {
+                    steps.push(odo.step_features(f.clone(), ds.poses().get(i)).unwrap());
+                }
             }
-        }
+        });
         for ((_, name, exact_until, bound), got) in runs.iter().zip(&got) {
             let want = reference(name);
             assert_eq!(want.len(), n);
@@ -289,12 +298,13 @@ mod tests {
             let lines: Vec<&str> = trace.lines().collect();
             assert_eq!(lines.len(), n);
             for (s, line) in got.iter().zip(&lines) {
-                let ours = [s.frame, s.points_in, s.tracked, s.essential_inliers, s.pose_inliers, s.redetected as usize];
+                let ours =
+                    [s.frame, s.points_in, s.tracked, s.essential_inliers, s.pose_inliers, s.redetected as usize];
                 let theirs = ["frame", "points_in", "tracked", "essential_inliers", "pose_inliers", "redetected"]
                     .map(|k| trace_value(line, k));
                 if (*name, s.frame) == ("dt_200", 96) {
-                    assert_eq!((ours[4], ours[5], theirs[4], theirs[5]), (838, 558, 837, 548), "{line}");
-                    assert_eq!(ours[..4], theirs[..4]);
+                    assert_eq!((ours[3], ours[4], theirs[3], theirs[4]), (838, 558, 837, 548), "{line}");
+                    assert_eq!((&ours[..3], ours[5]), (&theirs[..3], theirs[5]));
                 } else {
                     assert_eq!(ours, theirs, "{name} frame {}: siftlab vs OpenCV {line}", s.frame);
                 }

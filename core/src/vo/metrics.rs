@@ -9,7 +9,10 @@
 //! - RPE: RMSE over consecutive frames of the relative-motion error
 //!   E_i = (G_{i−1}⁻¹G_i)⁻¹(S_{i−1}⁻¹S_i), its translation and its angle;
 //! - the KITTI odometry metric: mean translation (%) and rotation (°/100 m)
-//!   error of segments of 100 … 800 m of true path, from every 10th frame.
+//!   error of segments of 100 … 800 m of true path, from every 10th frame;
+//!   [`kitti_segments`] lists the segments it averages over, which depend on
+//!   the truth only (a short run has few: frames 0–150 of KITTI 00, 110 m,
+//!   have two of 100 m).
 //!
 //! None of this has to equal OpenCV bit for bit, so it uses `nalgebra`.
 
@@ -84,6 +87,14 @@ impl TrajectoryMetrics {
         )
     }
 
+    /// [`Self::to_json`] with `"kitti_segments": N` (how many segments the
+    /// KITTI figures average over, [`kitti_segments`]) as the last key: what
+    /// `view_trajectory --metrics` writes.
+    pub fn to_json_with_segments(&self, kitti_segments: usize) -> String {
+        let json = self.to_json();
+        format!("{}, \"kitti_segments\": {kitti_segments}}}", &json[..json.len() - 1])
+    }
+
     /// The seven numbers in declaration order, `None` as NaN: how the app's
     /// worker posts them (a Float64Array).
     pub fn to_array(&self) -> [f64; 7] {
@@ -147,12 +158,26 @@ fn translation_norm(m: &Matrix4<f64>) -> f64 {
     Vector3::new(m[(0, 3)], m[(1, 3)], m[(2, 3)]).norm()
 }
 
+/// The estimated and the true motion from frame `a` to `b`: (S_a⁻¹S_b, G_a⁻¹G_b).
+fn motions(s: &[Matrix4<f64>], g: &[Matrix4<f64>], a: usize, b: usize) -> Result<(Matrix4<f64>, Matrix4<f64>)> {
+    Ok((inverse(&s[a], "an estimated pose")? * s[b], inverse(&g[a], "a ground-truth pose")? * g[b]))
+}
+
 /// The error of the estimated motion from frame `a` to `b` against the true
-/// one: (G_a⁻¹G_b)⁻¹(S_a⁻¹S_b).
+/// one, as RPE takes it: (G_a⁻¹G_b)⁻¹(S_a⁻¹S_b).
 fn motion_error(s: &[Matrix4<f64>], g: &[Matrix4<f64>], a: usize, b: usize) -> Result<Matrix4<f64>> {
-    let est = inverse(&s[a], "an estimated pose")? * s[b];
-    let truth = inverse(&g[a], "a ground-truth pose")? * g[b];
+    let (est, truth) = motions(s, g, a, b)?;
     Ok(inverse(&truth, "a true motion")? * est)
+}
+
+/// The same error the other way round, as the KITTI devkit takes it
+/// (`inverse(pose_delta_result) * pose_delta_gt`): (S_a⁻¹S_b)⁻¹(G_a⁻¹G_b).
+/// Its translation's length and its angle equal [`motion_error`]'s only for
+/// exact rotations; the true ones are orthonormal to 1.6e-7, which moved the
+/// KITTI figures of frames 0–150 by 1e-8 relative.
+fn kitti_motion_error(s: &[Matrix4<f64>], g: &[Matrix4<f64>], a: usize, b: usize) -> Result<Matrix4<f64>> {
+    let (est, truth) = motions(s, g, a, b)?;
+    Ok(inverse(&est, "an estimated motion")? * truth)
 }
 
 /// The least-squares rigid motion (R, t) that maps `src` onto `dst`
@@ -191,6 +216,61 @@ pub fn ate_rmse_aligned(est: &[[f64; 3]], gt: &[[f64; 3]]) -> Result<f64> {
     ate_rmse(&moved, gt)
 }
 
+/// One segment of the KITTI metric: frames `first` to `last` of the truth,
+/// scored against `length` metres of true path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KittiSegment {
+    pub first: usize,
+    pub last: usize,
+    pub length: f64,
+}
+
+/// The segments the KITTI devkit scores on the true poses `gt` (frames
+/// 0..N), in its order: by first frame, then by length.
+pub fn kitti_segments(gt: &[PoseRow]) -> Vec<KittiSegment> {
+    let g: Vec<Matrix4<f64>> = gt.iter().map(pose_matrix).collect();
+    segments(&g)
+}
+
+/// "2 segments of 100 m", "3 segments (2 of 100 m, 1 of 200 m)", or why there
+/// is none: what the CLI prints beside the KITTI figures.
+pub fn describe_kitti_segments(segs: &[KittiSegment]) -> String {
+    let plural = |n: usize| if n == 1 { "" } else { "s" };
+    let mut by_length: Vec<(f64, usize)> = Vec::new();
+    for s in segs {
+        match by_length.iter_mut().find(|(l, _)| *l == s.length) {
+            Some((_, n)) => *n += 1,
+            None => by_length.push((s.length, 1)),
+        }
+    }
+    match by_length.as_slice() {
+        [] => "no segment of 100 m or more".to_string(),
+        [(l, n)] => format!("{n} segment{} of {l} m", plural(*n)),
+        many => format!(
+            "{} segments ({})",
+            segs.len(),
+            many.iter().map(|(l, n)| format!("{n} of {l} m")).collect::<Vec<_>>().join(", ")
+        ),
+    }
+}
+
+/// The devkit's segments over 4×4 true poses (see [`kitti_errors`]).
+fn segments(g: &[Matrix4<f64>]) -> Vec<KittiSegment> {
+    let mut dist = vec![0.0f64; g.len()];
+    for i in 1..g.len() {
+        dist[i] = dist[i - 1] + translation_norm(&(g[i] - g[i - 1]));
+    }
+    let mut out = Vec::new();
+    for first in (0..g.len()).step_by(KITTI_STEP) {
+        for length in KITTI_LENGTHS {
+            if let Some(last) = (first..g.len()).find(|&i| dist[i] > dist[first] + length) {
+                out.push(KittiSegment { first, last, length });
+            }
+        }
+    }
+    out
+}
+
 /// Segment lengths of the KITTI odometry benchmark, in metres of true path.
 pub const KITTI_LENGTHS: [f64; 8] = [100.0, 200.0, 300.0, 400.0, 500.0, 600.0, 700.0, 800.0];
 /// The benchmark starts a segment at every 10th frame.
@@ -202,21 +282,15 @@ pub const KITTI_STEP: usize = 10;
 /// angle / L are averaged over all segments. Returns (t_err in %, r_err in
 /// °/100 m), `None` when no segment fits.
 pub fn kitti_errors(s: &[Matrix4<f64>], g: &[Matrix4<f64>]) -> Result<Option<(f64, f64)>> {
-    let mut dist = vec![0.0f64; g.len()];
-    for i in 1..g.len() {
-        dist[i] = dist[i - 1] + translation_norm(&(g[i] - g[i - 1]));
+    let (mut t_sum, mut r_sum) = (0.0, 0.0);
+    let segs = segments(g);
+    for seg in &segs {
+        let e = kitti_motion_error(s, g, seg.first, seg.last)?;
+        t_sum += translation_norm(&e) / seg.length;
+        r_sum += rotation_angle(&e) / seg.length;
     }
-    let (mut t_sum, mut r_sum, mut count) = (0.0, 0.0, 0usize);
-    for first in (0..g.len()).step_by(KITTI_STEP) {
-        for len in KITTI_LENGTHS {
-            let Some(last) = (first..g.len()).find(|&i| dist[i] > dist[first] + len) else { continue };
-            let e = motion_error(s, g, first, last)?;
-            t_sum += translation_norm(&e) / len;
-            r_sum += rotation_angle(&e) / len;
-            count += 1;
-        }
-    }
-    Ok((count > 0).then(|| (100.0 * t_sum / count as f64, (r_sum / count as f64).to_degrees() * 100.0)))
+    let count = segs.len() as f64;
+    Ok((!segs.is_empty()).then(|| (100.0 * t_sum / count, (r_sum / count).to_degrees() * 100.0)))
 }
 
 /// Every score of the estimate `est` against the truth `gt` (pose rows of
