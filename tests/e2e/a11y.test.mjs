@@ -139,6 +139,10 @@ test('see inside: whole-frame matching', async () => {
   await idle();
   await page.waitForSelector(tid('wf-counts'), { timeout: 180000 });
   await page.waitForSelector(tid('tradeoff'), { timeout: 180000 });
+  // A picked match: its panel and the epipolar line over the flow.
+  await page.focus(tid('wf-stage'));
+  await page.keyboard('ArrowRight');
+  await page.waitForSelector(tid('wf-pick'), { timeout: 10000 });
   await check('see-matches');
 });
 
@@ -207,22 +211,29 @@ async function cvdShots(sel, stem) {
   await simulate(null);
 }
 
-test('colour-vision screenshots: whole-frame matching and the odometry comparison', async () => {
+test('colour-vision screenshots: whole-frame matching, the odometry\'s frame view and the comparison', async () => {
   await page.setViewportSize({ width: 1400, height: 1300 });
   await page.goto(`${BASE}?src=demo&frame=120&algo=nndr&t=0.8&see=matches`);
   await idle();
   await page.waitForSelector(tid('wf-counts'), { timeout: 180000 });
   await page.waitForSelector(tid('tradeoff'), { timeout: 180000 });
+  await page.focus(tid('wf-stage'));
+  await page.keyboard('ArrowRight');
+  await page.waitForSelector(tid('wf-pick'), { timeout: 10000 });
   await cvdShots(tid('whole-frame'), 'whole-frame');
   await page.goto(BASE);
   await idle();
   await page.fill(tid('vo-frame-id'), CVD_FRAME_ID);
+  // The odometry's own view: inliers, outliers and re-detections on the last frame.
+  await page.click(tid('vo-run'));
+  await page.waitForSelector(tid('vo-metrics'), { timeout: 300000 });
+  await cvdShots(tid('vo-own'), 'vo-frame');
   await page.click(tid('vo-compare-run'));
   await page.waitForFunction((sel) => document.querySelector(sel)?.textContent === '4 runs done', tid('vo-compare-status'), { timeout: 600000 });
   await cvdShots('.vo-compare', 'compare');
   // The simulation reached the pixels: each simulated shot differs from the normal one
   // (Firefox, for one, paints no filter set on the root element).
-  for (const f of ['whole-frame', 'compare']) {
+  for (const f of ['whole-frame', 'vo-frame', 'compare']) {
     const normal = fs.readFileSync(path.join(SHOTS, `cvd-${f}-normal.png`));
     for (const v of ['deuteranopia', 'protanopia']) {
       assert.ok(!fs.readFileSync(path.join(SHOTS, `cvd-${f}-${v}.png`)).equals(normal), `${f} under ${v} looks like normal vision`);

@@ -13,9 +13,13 @@ import path from 'node:path';
 import { suite, sleep, ROOT } from './harness.mjs';
 
 const ENGINE = process.env.E2E_ENGINE || 'chromium';
-// The odometry cases' FRAME_ID: the demo's whole straight run (0–99) where SIFT takes
-// well under a second a frame, 9 (ten frames) in WebKit (~3 s a frame, no relaxed SIMD).
-const VO_LAST = Number(process.env.E2E_VO_FRAME_ID || (ENGINE === 'webkit' ? 9 : 99));
+// The odometry cases' FRAME_ID: the whole demo (0–150, the manual's view_trajectory 150,
+// through the first turn) where SIFT takes well under a second a frame, 9 (ten frames)
+// in WebKit (~2 s a frame, no relaxed SIMD).
+const VO_LAST = Number(process.env.E2E_VO_FRAME_ID || (ENGINE === 'webkit' ? 9 : 150));
+// The frame whose counts and picture the odometry case checks: in the turn (frame 110)
+// when the run reaches it.
+const VO_SHOWN = Math.min(110, VO_LAST);
 // Whether the engine validates relaxed SIMD (measured: Chromium 156 and Firefox 153 do,
 // WebKitGTK 2.50 does not), i.e. which worker build www/worker.js must pick.
 const RELAXED = { chromium: true, firefox: true, webkit: false }[ENGINE];
@@ -203,11 +207,12 @@ test('the page opens on real KITTI frames 0/1, fetching only those two frames, w
   await page.screenshot(shot('opening.png'), { fullPage: true });
 });
 
-test('lab manual examples: each click shows the manual value beside siftlab\'s, equal (✓)', async () => {
+test('lab manual examples: each click shows the manual value beside siftlab\'s, equal (✓), and the intro\'s feature 132', async () => {
   await page.goto(BASE);
   await idle();
-  assert.equal(await page.count('[data-testid^="manual-example-"]'), 7);
-  for (let i = 0; i < 7; i++) {
+  const n = await page.count('[data-testid^="manual-example-"]');
+  assert.equal(n, 8);
+  for (let i = 0; i < n; i++) {
     const label = await page.textContent(tid(`manual-example-${i}`));
     const m = label.match(/get_info -a (\S+)(?: -t (\S+))? (\d+) (\d+)/);
     assert.ok(m, label);
@@ -225,10 +230,25 @@ test('lab manual examples: each click shows the manual value beside siftlab\'s, 
     assert.equal(await page.inputValue(tid('frame-id')), frame);
     assert.equal(await tuple(), want, m[0]);
     assert.equal((await page.textContent(tid('manual-got'))).trim(), want);
-    assert.equal((await page.textContent(tid('manual-expected'))).trim(), want, `the manual's value for ${m[0]}`);
-    assert.match(await page.textContent(tid('manual-mark')), /^✓/);
     assert.match(await page.getAttribute(tid(`manual-example-${i}`), 'class'), /active/);
-    if (i === 1) await page.screenshot(shot('manual-example.png'), { fullPage: true });
+    const expected = (await page.textContent(tid('manual-expected'))).trim();
+    if (i === 0) {
+      // The introduction's example: the manual's build ordered frame 100's keypoints
+      // differently; OpenCV 4.8.0.76 (the CLI) gives the manual's tuple at feature 132.
+      assert.equal(m[0], 'get_info -a dt -t 232.5 101 127');
+      assert.notEqual(expected, want);
+      assert.match(await page.textContent(tid('manual-mark')), /^≠ .*feature 127 is feature 132 here/);
+      await page.click(tid('manual-other-feature'));
+      await page.waitForFunction((sel) => /^✓/.test(document.querySelector(sel)?.textContent || ''), tid('manual-mark'), { timeout: 60000 });
+      assert.equal(await page.inputValue(tid('feature')), '132');
+      assert.equal(await tuple(), cliRet8(['-a', 'dt', '-t', '232.5', '101', '132']));
+      assert.equal(await tuple(), expected, 'feature 132 is the manual\'s tuple');
+      await page.screenshot(shot('manual-intro-132.png'), { fullPage: true });
+    } else {
+      assert.equal(expected, want, `the manual's value for ${m[0]}`);
+      assert.match(await page.textContent(tid('manual-mark')), /^✓/);
+    }
+    if (i === 2) await page.screenshot(shot('manual-example.png'), { fullPage: true });
   }
 });
 
@@ -437,37 +457,62 @@ test('narrow screen layout', async () => {
 test(`visual odometry on the bundled frames 0 to ${VO_LAST} equals the CLI view_trajectory ${VO_LAST}`, async () => {
   await page.goto(`${BASE}?lanes=${LANES}`);
   await idle();
-  // The lab's count: view_trajectory FRAME_ID runs frames 0 … FRAME_ID; the demo's
-  // contiguous run from 0 is 0–99 (its 119, 120, 149, 150 are not part of it).
+  // The lab's count: view_trajectory FRAME_ID runs frames 0 … FRAME_ID; the demo is
+  // frames 0–150, and the view starts on the manual's view_trajectory 150.
   const ids = fs.readdirSync(path.join(ROOT, DATASET, 'gray/00/image_0')).filter((f) => /^\d{6}\.png$/.test(f)).map((f) => Number(f.slice(0, 6)));
   let last = 0;
   while (ids.includes(last + 1)) last++;
-  assert.equal(last, 99);
+  assert.equal(last, 150);
   assert.equal(await page.inputValue(tid('vo-frame-id')), String(last));
-  await page.fill(tid('vo-frame-id'), String(VO_LAST));
-  await page.waitForFunction(([sel, w]) => document.querySelector(sel)?.textContent === w,
-    [tid('vo-range'), `frames 0 to ${VO_LAST} (${VO_LAST + 1} frames) · available: frames 0 to ${last}`]);
-  await page.click(tid('vo-run'));
+  if (VO_LAST === 150) {
+    await page.click(tid('vo-manual-150'));
+  } else {
+    await page.fill(tid('vo-frame-id'), String(VO_LAST));
+    await page.waitForFunction(([sel, w]) => document.querySelector(sel)?.textContent === w,
+      [tid('vo-range'), `frames 0 to ${VO_LAST} (${VO_LAST + 1} frames) · available: frames 0 to ${last}`]);
+    await page.click(tid('vo-run'));
+  }
   await page.waitForSelector(tid('vo-ate'), { timeout: 900000 });
   const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-'));
   // The CLI reports the trajectory error with its progress (stdout or stderr: read both).
-  const vo = spawnSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', String(VO_LAST)], { cwd: tmp, encoding: 'utf8' });
+  const vo = spawnSync(CLI, ['--opencv-lanes', String(LANES), '-d', path.join(ROOT, DATASET), 'view_trajectory', String(VO_LAST),
+    '--save-poses', 'poses.txt', '--trace', 'trace.jsonl'], { cwd: tmp, encoding: 'utf8' });
   assert.equal(vo.status, 0, vo.stderr);
   const ate = (vo.stdout + vo.stderr).match(/trajectory error \(ATE RMSE, (\d+) frames\): ([\d.]+) m/);
   assert.equal(ate[1], String(VO_LAST + 1));
   assert.equal(await page.textContent(tid('vo-ate')), `${ate[2]} m`);
   assert.match(await page.textContent(tid('vo-progress')), new RegExp(`frame ${VO_LAST + 1} / ${VO_LAST + 1}`));
   metrics.vo = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
+  // The poses, byte for byte the CLI's --save-poses.
+  const poses = await page.download(() => page.click(tid('vo-poses')));
+  assert.ok(poses.bytes.equals(fs.readFileSync(path.join(tmp, 'poses.txt'))), 'poses.txt differs from the CLI');
   // The lab's window as a PNG: the same bytes the CLI writes.
   const png = await page.download(() => page.click(tid('vo-download')));
   assert.equal(png.name, 'trajectory.png');
   assert.ok(png.bytes.equals(fs.readFileSync(path.join(tmp, 'trajectory.png'))), 'trajectory.png differs from the CLI');
   await page.elementScreenshot('.trajectory', shot('trajectory.png'));
+  // The odometry's own view: the frame in the turn, its counts equal to the CLI's trace.
+  const trace = fs.readFileSync(path.join(tmp, 'trace.jsonl'), 'utf8').trim().split('\n').map((l) => JSON.parse(l));
+  assert.equal(trace.length, VO_LAST + 1);
+  for (const f of [VO_SHOWN, VO_LAST, 1]) {
+    await page.fill(tid('vo-frame-slider'), String(f));
+    await page.waitForSelector(`${tid('vo-step-counts')}[data-frame="${f}"]`, { timeout: 10000 });
+    const got = await page.evaluate((sel) => ({ ...document.querySelector(sel).dataset }), tid('vo-step-counts'));
+    const t = trace[f];
+    assert.deepEqual([got.tracked, got.inliers, got.poseInliers, got.redetected].map(String),
+      [t.tracked, t.essential_inliers, t.pose_inliers, t.redetected].map(String), `frame ${f}`);
+    // One segment per tracked point: inliers and outliers together.
+    const segs = await page.evaluate((sel) => [...document.querySelectorAll(`${sel} path.flow-line`)]
+      .map((p) => (p.getAttribute('d').match(/M/g) || []).length), tid('vo-flow'));
+    assert.deepEqual(segs, [t.essential_inliers, t.tracked - t.essential_inliers], `frame ${f}: inlier / outlier segments`);
+    if (f === VO_SHOWN) await page.elementScreenshot(tid('vo-own'), shot(`vo-frame-${f}.png`));
+  }
+  metrics.voFrame = await page.textContent(tid('vo-step-counts'));
   fs.rmSync(tmp, { recursive: true });
   // Past the run: refused with the reason, nothing read.
-  await page.fill(tid('vo-frame-id'), '120');
+  await page.fill(tid('vo-frame-id'), '151');
   await page.click(tid('vo-run'));
-  assert.match(await page.textContent(tid('vo-error')), /FRAME_ID 120 needs frames 0 to 120 \(121 frames\), but the frames in a row from 0 are frames 0 to 99/);
+  assert.match(await page.textContent(tid('vo-error')), /FRAME_ID 151 needs frames 0 to 151 \(152 frames\), but the frames in a row from 0 are frames 0 to 150/);
   // A broken frame 3 in a MyKITTI folder: the detection helpers leave it to the
   // tracker, which fails on it in frame order, after the steps before it, with
   // the one-worker loop's message.
@@ -571,6 +616,69 @@ test(`comparison view: LK, dt 200, nn, nndr 0.8 on frames 0-${VO_LAST}, metrics 
   await page.elementScreenshot('.vo-compare', shot('vo-compare.png'));
 });
 
+test('whole-frame flow on 119→120: a picked match shows its epipolar line and the CLI\'s Sampson distance', async () => {
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-pick-'));
+  const cliMatchAll = (algo, t) => JSON.parse(execFileSync(CLI,
+    ['--opencv-lanes', String(LANES), '-d', path.join(ROOT, DATASET), 'match_all', '-a', algo, '-t', t, '--json', '120'],
+    { cwd: tmp, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'], maxBuffer: 1 << 26 }));
+  await page.goto(`${BASE}?lanes=${LANES}&src=demo&frame=120&algo=nndr&t=0.8&see=matches`);
+  await idle();
+  const want = cliMatchAll('nndr', '0.8');
+  await page.waitForSelector(`${tid('wf-counts')}[data-matches="${want.matches}"]`, { timeout: 180000 });
+  assert.equal(want.records.length, want.matches);
+  assert.ok(await page.evaluate((sel) => document.querySelector(sel).checked, tid('wf-layout-flow')), 'flow is the default layout');
+  const canvas = await page.evaluate((sel) => { const c = document.querySelector(sel); return [c.width, c.height]; }, tid('wf-canvas'));
+  assert.deepEqual(canvas, [1241, 376], 'flow: the current frame only');
+  await page.elementScreenshot('.whole-frame', shot('flow-nndr-0.8.png'));
+  const byPair = new Map(want.records.map((r) => [`${r.query}/${r.train}`, r]));
+  const pickedIs = async () => {
+    const d = await page.evaluate((sel) => ({ ...document.querySelector(sel).dataset }), tid('wf-pick'));
+    const r = byPair.get(`${d.query}/${d.train}`);
+    assert.ok(r, `the picked ${d.query} → ${d.train} is one of the CLI's matches`);
+    // Same f64 on both sides: the core's Sampson distance, natively and in wasm.
+    assert.equal(Number(d.sampson), r.sampson, `Sampson of ${d.query} → ${d.train}`);
+    assert.equal(d.distance, String(r.distance));
+    assert.match(await page.textContent(tid('wf-pick-verdict')), new RegExp(`: ${r.correct ? 'correct' : 'wrong'}$`));
+    assert.equal(await page.count('svg.wf-overlay line.epipolar'), 1, 'the epipolar line is drawn');
+    return r;
+  };
+  // Keys step through the matches shown.
+  await page.focus(tid('wf-stage'));
+  await page.keyboard('ArrowRight');
+  await page.waitForSelector(tid('wf-pick'), { timeout: 10000 });
+  const first = await pickedIs();
+  await page.keyboard('ArrowRight');
+  await page.waitForFunction(([sel, q, t]) => { const d = document.querySelector(sel)?.dataset; return d && `${d.query}/${d.train}` !== `${q}/${t}`; },
+    [tid('wf-pick'), first.query, first.train], { timeout: 10000 });
+  await pickedIs();
+  // The filter: only the wrong ones; a click on one's current end picks it.
+  await page.click(tid('wf-filter-wrong'));
+  const wrong = want.records.filter((r) => r.correct === false);
+  assert.ok(wrong.length > 0);
+  const target = wrong[0];
+  const kp = cliSift(120).keypoints[target.train];
+  const box = await page.boundingBox(tid('wf-canvas'));
+  await page.mouseClick(box.x + kp.x * box.width / 1241, box.y + kp.y * box.height / 376);
+  await page.waitForFunction(([sel, q, t]) => { const d = document.querySelector(sel)?.dataset; return d && d.query === String(q) && d.train === String(t); },
+    [tid('wf-pick'), target.query, target.train], { timeout: 10000, what: `the wrong match ${target.query} → ${target.train}` });
+  const r = await pickedIs();
+  assert.equal(r.correct, false);
+  metrics.pickedWrong = await page.textContent(tid('wf-pick'));
+  await page.elementScreenshot('.whole-frame', shot('flow-nndr-0.8-picked-wrong.png'));
+  // dt 300 on the same pair: all matches under 300, far more of them wrong.
+  await page.click(tid('wf-filter-all'));
+  await page.selectOption(tid('algo'), 'dt');
+  await page.fill(tid('threshold'), '300');
+  const dt = cliMatchAll('dt', '300');
+  await page.waitForSelector(`${tid('wf-counts')}[data-matches="${dt.matches}"]`, { timeout: 180000 });
+  assert.equal(await page.getAttribute(tid('wf-counts'), 'data-correct'), String(dt.correct));
+  await page.elementScreenshot('.whole-frame', shot('flow-dt-300.png'));
+  // The side-by-side layout stays available.
+  await page.click(tid('wf-layout-side'));
+  await page.waitForFunction((sel) => document.querySelector(sel)?.width === 2482, tid('wf-canvas'), { timeout: 10000 });
+  fs.rmSync(tmp, { recursive: true });
+});
+
 test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, anatomy)', async () => {
   const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-match-all-'));
   const cliMatchAll = (algo, t) => JSON.parse(execFileSync(CLI,
@@ -589,7 +697,7 @@ test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, 
     await page.waitForSelector(sel, { timeout: 180000 });
     assert.equal(await page.getAttribute(tid('wf-counts'), 'data-correct'), String(want.correct), `${algo} ${t}`);
     assert.match(await page.textContent(tid('wf-counts')), new RegExp(`precision ${want.precision.toFixed(4)}`));
-    metrics.wholeFrame[`${algo} ${t || 'none'}`] = want;
+    metrics.wholeFrame[`${algo} ${t || 'none'}`] = { matches: want.matches, correct: want.correct, precision: want.precision };
     if (algo === 'nndr') {
       metrics.sweepStatus = (await page.textContent(tid('wf-status'))).trim();
       await page.elementScreenshot('.see-inside', shot('whole-frame.png'));

@@ -39,8 +39,7 @@ pub fn flow_paths(d: &StepDetail) -> FlowPaths {
     let mut out = FlowPaths::default();
     let (mut inl, mut outl) = (Vec::new(), Vec::new());
     for ((p, c), &ok) in d.prev.iter().zip(&d.cur).zip(&d.essential_mask) {
-        let (lines, ends) =
-            if ok { (&mut out.inlier_lines, &mut inl) } else { (&mut out.outlier_lines, &mut outl) };
+        let (lines, ends) = if ok { (&mut out.inlier_lines, &mut inl) } else { (&mut out.outlier_lines, &mut outl) };
         let _ = write!(lines, "M{:.1} {:.1}L{:.1} {:.1}", p[0], p[1], c[0], c[1]);
         ends.extend_from_slice(c);
     }
@@ -85,11 +84,34 @@ pub fn counts_text(frame: u32, c: &StepCounts, lk: bool, detected: usize) -> Str
 }
 
 /// The per-frame chart: one polyline's points for `values` (one per frame
-/// from 0), x across `w`, y from `ymax` at the top to 0 at `h`.
+/// from 0; frame 0 tracks nothing and is left out), x across `w` for frames
+/// 0 … `frames` − 1, y from `ymax` at the top to 0 at `h`.
 pub fn series_points(values: &[u32], frames: usize, ymax: u32, w: f64, h: f64) -> String {
-    let fx = |i: usize| if frames <= 1 { 0.0 } else { w * i as f64 / (frames - 1) as f64 };
     let fy = |v: u32| h - h * v as f64 / ymax.max(1) as f64;
-    values.iter().enumerate().map(|(i, &v)| format!("{:.1},{:.1}", fx(i), fy(v))).collect::<Vec<_>>().join(" ")
+    values
+        .iter()
+        .enumerate()
+        .skip(1)
+        .map(|(i, &v)| format!("{:.1},{:.1}", chart_x(i, frames, w), fy(v)))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// The chart's x for frame `i` of `frames`.
+pub fn chart_x(i: usize, frames: usize, w: f64) -> f64 {
+    if frames <= 1 {
+        0.0
+    } else {
+        w * i as f64 / (frames - 1) as f64
+    }
+}
+
+/// How often the loop re-detected, after frame 0: "SIFT re-detected on 109
+/// of 110 frames (whenever fewer than 1500 points survive tracking)".
+pub fn redetections_text(c: &[StepCounts]) -> String {
+    let after = c.len().saturating_sub(1);
+    let n = c.iter().skip(1).filter(|c| c.redetected).count();
+    format!("SIFT re-detected on {n} of {after} frames (whenever fewer than 1500 points survive tracking)")
 }
 
 /// The chart's top: the largest count, rounded up to a multiple of 500.
@@ -131,20 +153,32 @@ mod tests {
 
     #[test]
     fn counts_read_as_a_sentence() {
-        let c = StepCounts { points_in: 1500, tracked: 1480, essential_inliers: 1200, pose_inliers: 1190, redetected: true };
+        let c = StepCounts {
+            points_in: 1500,
+            tracked: 1480,
+            essential_inliers: 1200,
+            pose_inliers: 1190,
+            redetected: true,
+        };
         assert_eq!(
             counts_text(110, &c, true, 1500),
             "frame 110: 1480 of 1500 (99 %) points tracked · RANSAC inliers 1200 of 1480 (81 %) · recoverPose 1190 \
              · fewer than 1500 left: SIFT re-detected the points to track"
         );
-        assert!(counts_text(110, &c, false, 0).starts_with("frame 110: 1480 of 1500 (99 %) keypoints of the previous frame matched"));
+        assert!(counts_text(110, &c, false, 0)
+            .starts_with("frame 110: 1480 of 1500 (99 %) keypoints of the previous frame matched"));
         let first = StepCounts { points_in: 0, tracked: 0, essential_inliers: 0, pose_inliers: 0, redetected: true };
         assert_eq!(counts_text(0, &first, true, 1500), "frame 0: SIFT detected 1500 points to track");
     }
 
     #[test]
     fn chart_geometry() {
-        assert_eq!(series_points(&[0, 500, 1000], 3, 1000, 100.0, 50.0), "0.0,50.0 50.0,25.0 100.0,0.0");
+        assert_eq!(series_points(&[0, 500, 1000], 3, 1000, 100.0, 50.0), "50.0,25.0 100.0,0.0");
+        let c = |r| StepCounts { redetected: r, ..StepCounts::default() };
+        assert_eq!(
+            redetections_text(&[c(true), c(true), c(false), c(true)]),
+            "SIFT re-detected on 2 of 3 frames (whenever fewer than 1500 points survive tracking)"
+        );
         assert_eq!(chart_top(&[1499, 1200]), 1500);
         assert_eq!(chart_top(&[1501]), 2000);
         assert_eq!(chart_top(&[]), 500);

@@ -115,7 +115,8 @@ pub fn TrajectoryView() -> impl IntoView {
             let on_event = move |m| match m {
                 VoReply::Step { frame, position, truth, counts, detail, .. } => {
                     steps.update(|s| s.push((frame, position, truth)));
-                    frame_steps.update(|s| s.push(FrameStep { counts, detail: detail.map(|d| std::sync::Arc::from(d)) }));
+                    frame_steps
+                        .update(|s| s.push(FrameStep { counts, detail: detail.map(|d| std::sync::Arc::from(d)) }));
                 }
                 VoReply::Metrics { metrics: m, .. } => metrics.set(Some(TrajectoryMetrics::from_array(&m))),
                 VoReply::Done { ate, png, ms, kitti, .. } => {

@@ -6,7 +6,7 @@
 //! slider (or the arrow keys on it) steps through the frames run so far.
 
 use super::legend::{Legend, Sw};
-use crate::model::vo_frame::{chart_top, counts_text, flow_paths, png_size, series_points};
+use crate::model::vo_frame::{chart_top, chart_x, counts_text, flow_paths, png_size, redetections_text, series_points};
 use crate::platform::{blob_url, revoke};
 use crate::protocol::odometry::StepCounts;
 use leptos::prelude::*;
@@ -24,14 +24,14 @@ pub struct FrameStep {
 const LEGEND: &[Sw] = &[
     Sw { style: INLIER, line: true, outline: true, label: " RANSAC inlier (solid, circled end) " },
     Sw { style: OUTLIER, line: true, outline: true, label: " outlier (dashed, crossed end) " },
-    Sw { style: REDETECTED, line: false, outline: true, label: " re-detected point ·" },
+    Sw { style: REDETECTED, line: false, outline: true, label: " re-detected point (on demand) ·" },
 ];
 
 /// The chart's three series: tracked points, RANSAC inliers, recoverPose's count.
 const SERIES: [(&str, Style, fn(&StepCounts) -> u32); 3] = [
     ("tracked / matched", TRACKERS[1], |c| c.tracked),
     ("RANSAC inliers", Style { color: SKY_BLUE, ..INLIER }, |c| c.essential_inliers),
-    ("recoverPose", TRACKERS[0], |c| c.pose_inliers),
+    ("recoverPose", TRACKERS[2], |c| c.pose_inliers),
 ];
 
 #[component]
@@ -45,6 +45,9 @@ pub fn VoFrameView(
 ) -> impl IntoView {
     // None: follow the newest frame.
     let picked = RwSignal::new(None::<usize>);
+    // The re-detected points cover the frame (the loop re-detects on almost
+    // every frame): shown on demand.
+    let show_detected = RwSignal::new(false);
     let count = move || steps.with(|s| s.len());
     let shown = move || {
         let n = count();
@@ -93,7 +96,7 @@ pub fn VoFrameView(
                 <path d=paths.inlier_ends class="flow-end" stroke=hex(INLIER.color)/>
                 <path d=paths.outlier_lines class="flow-line" stroke=hex(OUTLIER.color) stroke-dasharray=dash(&OUTLIER)/>
                 <path d=paths.outlier_ends class="flow-end" stroke=hex(OUTLIER.color)/>
-                <path d=paths.detected class="flow-end" stroke=hex(REDETECTED.color)/>
+                {show_detected.get().then(|| view! { <path d=paths.detected.clone() class="flow-end" stroke=hex(REDETECTED.color)/> })}
             </svg>
         })
     };
@@ -140,18 +143,10 @@ pub fn VoFrameView(
             })
             .collect_view();
         let cursor = shown().map(|i| {
-            let x = if all.len() > 1 { w * i as f64 / (all.len() - 1) as f64 } else { 0.0 };
+            let x = chart_x(i, all.len(), w);
             view! { <line x1=x x2=x y1=0 y2=h class="cursor"/> }
         });
-        let redetections = all
-            .iter()
-            .enumerate()
-            .filter(|(i, c)| *i > 0 && c.redetected && lk.get())
-            .map(|(i, _)| {
-                let x = w * i as f64 / (all.len() - 1) as f64;
-                view! { <line x1=x x2=x y1=h y2=h + 6.0 class="tick redetect"/> }
-            })
-            .collect_view();
+        let redetections = lk.get().then(|| format!("· {} ", redetections_text(&all)));
         let keys = SERIES
             .iter()
             .map(|(name, st, _)| {
@@ -169,11 +164,10 @@ pub fn VoFrameView(
                     <text x=0 y=h + 20.0 class="tick-label start">"frame 0"</text>
                     <text x=w y=h + 20.0 class="tick-label end">{format!("frame {}", all.len() - 1)}</text>
                     {lines}
-                    {redetections}
                     {cursor}
                 </svg>
                 <figcaption class="muted small">
-                    {keys}{if lk.get() { "· ticks under the axis: re-detections · " } else { "· " }}"the line: the frame shown"
+                    {keys}{redetections}"· the vertical line: the frame shown"
                 </figcaption>
             </figure>
         })
@@ -207,6 +201,17 @@ pub fn VoFrameView(
             </div>
             {counts}
             <Legend swatches=LEGEND tail="segments run from where a point was in the previous frame to where it is now" dark=true/>
+            <Show when=move || lk.get()>
+                <label class="small">
+                    <input type="checkbox" data-testid="vo-show-detected"
+                        prop:checked=move || show_detected.get()
+                        on:change=move |ev| show_detected.set(event_target_checked(&ev))/>
+                    {move || {
+                        let n = shown().and_then(|i| steps.with(|s| s.get(i).and_then(|f| f.detail.as_ref().map(|d| d.detected.len())))).unwrap_or(0);
+                        format!(" show the {n} points SIFT re-detected on this frame (the next frame tracks them)")
+                    }}
+                </label>
+            </Show>
             <div class="vo-frame">{picture}</div>
             {chart}
         </div>

@@ -1,10 +1,15 @@
 //! Whole-frame matching: every match of the chosen strategy and threshold
-//! between the two frames, drawn over them by the core (correct: solid,
-//! circled ends; wrong: dashed, crossed ends) by the ground-truth epipolar
-//! geometry, with counts and precision;
-//! and the trade-off chart: precision against number of matches as each
-//! strategy's threshold sweeps its range. The sweep runs once per pair in a
-//! worker (the core's `matching::sweep`); thresholds then cost a binary search.
+//! between the two frames, judged correct or wrong by the ground-truth
+//! epipolar geometry, drawn by the core (correct: solid, circled ends; wrong:
+//! dashed, crossed ends) as flow on the current frame — each match a segment
+//! from where its point was to where it is now — or side by side; a filter
+//! shows all, the correct or the wrong ones. A click (or the arrow keys) picks
+//! a match: its epipolar line in the current frame from the true poses, its
+//! Sampson distance against the threshold, the query's two nearest distances
+//! and why the strategy kept it. Below, the trade-off chart: precision against
+//! number of matches as each strategy's threshold sweeps its range. The sweep
+//! runs once per pair in a worker (the core's `matching::sweep`); thresholds
+//! then cost a binary search.
 
 use super::canvas2d::{context, put_rgba};
 use super::legend::{swatch, Legend, Sw};
@@ -15,14 +20,19 @@ use crate::model::see_inside::{
     chart_points, chart_x, chart_xmax, chart_xy, chart_y, counts_text, crossings_text, current, marker_points,
     parse_px, rule_text,
 };
+use crate::model::whole_frame::{clip_line, ends, filter_pairs, nearest_match, step_pick, Filter, Layout};
 use crate::protocol::inside::SweepData;
 use crate::services::inside;
 use crate::services::loading;
 use leptos::prelude::*;
-use siftlab_core::matching::DMatch;
-use siftlab_core::matching::StrategyKind;
-use siftlab_core::render::palette::{self, hex, CORRECT, UNJUDGED, WRONG};
-use siftlab_core::render::whole_frame;
+use nalgebra::Matrix3;
+use siftlab_core::matching::epipolar::{epipolar_line, fundamental, sampson};
+use siftlab_core::matching::explain;
+use siftlab_core::matching::{DMatch, Strategy, StrategyKind};
+use siftlab_core::pyfmt::py_f32;
+use siftlab_core::render::palette::{self, hex, CORRECT, EPIPOLAR, PICKED, UNJUDGED, WRONG};
+use siftlab_core::render::{flow_frame, whole_frame};
+use siftlab_core::vo::Camera;
 use std::sync::Arc;
 
 /// At most this many lines are drawn (the lowest keys first): dt near 500
@@ -33,8 +43,13 @@ const MAX_LINES: usize = 20_000;
 const LEGEND: &[Sw] = &[
     Sw { style: CORRECT, line: true, outline: true, label: " correct (solid, circled ends) " },
     Sw { style: WRONG, line: true, outline: true, label: " wrong (dashed, crossed ends) " },
-    Sw { style: UNJUDGED, line: true, outline: true, label: " not judged (no poses) ·" },
+    Sw { style: UNJUDGED, line: true, outline: true, label: " not judged (no poses) " },
+    Sw { style: PICKED, line: true, outline: true, label: " the picked match " },
+    Sw { style: EPIPOLAR, line: true, outline: false, label: " its epipolar line ·" },
 ];
+
+/// A click picks a match within this many picture pixels.
+const REACH: f64 = 12.0;
 
 /// Markers along each curve of the trade-off chart.
 const CURVE_MARKS: usize = 7;
@@ -48,7 +63,16 @@ impl PartialEq for Swept {
     }
 }
 
-fn draw(canvas: &web_sys::HtmlCanvasElement, s: &Swept, pairs: &[[u32; 2]], ok: Option<&[bool]>) {
+/// The picture's size: the current frame (flow) or both side by side.
+fn picture_size(s: &Swept, layout: Layout) -> (f64, f64) {
+    let Swept(_, p, c) = s;
+    match layout {
+        Layout::Flow => (c.width as f64, c.height as f64),
+        Layout::Side => ((p.width + c.width) as f64, p.height.max(c.height) as f64),
+    }
+}
+
+fn draw(canvas: &web_sys::HtmlCanvasElement, s: &Swept, layout: Layout, pairs: &[[u32; 2]], ok: Option<&[bool]>) {
     let Swept(_, p, c) = s;
     let (Ok(pi), Ok(ci)) = (
         siftlab_core::GrayImage::new(p.width, p.height, p.gray.clone()),
@@ -61,13 +85,29 @@ fn draw(canvas: &web_sys::HtmlCanvasElement, s: &Swept, pairs: &[[u32; 2]], ok: 
         .iter()
         .map(|&[q, t]| DMatch { query_idx: q as usize, train_idx: t as usize, distance: 0.0 })
         .collect();
-    let Ok(img) = whole_frame(&pi, &p.features.keypoints, &ci, &c.features.keypoints, &ms, ok.map(|o| &o[..n])) else {
-        return;
+    let (pk, ck) = (&p.features.keypoints, &c.features.keypoints);
+    let ok = ok.map(|o| &o[..n]);
+    let img = match layout {
+        Layout::Flow => flow_frame(&ci, pk, ck, &ms, ok),
+        Layout::Side => whole_frame(&pi, pk, &ci, ck, &ms, ok),
     };
+    let Ok(img) = img else { return };
     let rgba: Vec<u8> = img.pixels().flat_map(|px| [px[0], px[1], px[2], 255]).collect();
     if let Some(ctx) = context(canvas, img.width(), img.height()) {
         put_rgba(&ctx, &rgba, img.width(), img.height(), 0.0, 0.0);
     }
+}
+
+/// Everything the picked match's panel says.
+#[derive(Clone, Debug, PartialEq)]
+struct Pick {
+    index: usize,
+    of: usize,
+    query: u32,
+    train: u32,
+    distance: Option<f32>,
+    sampson: Option<f64>,
+    line: Option<[f64; 3]>,
 }
 
 #[component]
@@ -77,6 +117,12 @@ pub fn WholeFrameView() -> impl IntoView {
     let status = RwSignal::new(String::new());
     let error = RwSignal::new(None::<String>);
     let canvas_ref = NodeRef::<leptos::html::Canvas>::new();
+    let layout = RwSignal::new(Layout::Flow);
+    let filter = RwSignal::new(Filter::All);
+    // The picked match as (query, train): it stays picked while it is shown.
+    let picked = RwSignal::new(None::<[u32; 2]>);
+    // The true geometry of the pair, for the picked match's line and distance.
+    let fmat = RwSignal::new(None::<Matrix3<f64>>);
 
     // Once per pair (and per epipolar threshold): the sweep in the worker.
     Effect::new(move |_| {
@@ -88,6 +134,7 @@ pub fn WholeFrameView() -> impl IntoView {
         let (source, fid) = (lab.source.get_untracked(), lab.frame_id.get_untracked());
         error.set(None);
         swept.set(None);
+        fmat.set(None);
         status.set("reading the ground-truth poses".into());
         leptos::task::spawn_local(async move {
             let poses = match loading::pair_poses(&source, fid).await {
@@ -97,6 +144,7 @@ pub fn WholeFrameView() -> impl IntoView {
                     None
                 }
             };
+            fmat.set(poses.as_ref().and_then(|ab| fundamental(&ab[0], &ab[1], &Camera::default()).ok()));
             let t0 = crate::platform::now_ms();
             let poses = poses.map(Box::new);
             let (p2, c2) = (p.clone(), c.clone());
@@ -130,14 +178,165 @@ pub fn WholeFrameView() -> impl IntoView {
         let (kind, t) = (lab.algo.get(), lab.threshold());
         Some(current(&s.0.sweep, kind, &t).map(|(v, _)| v))
     });
-    Effect::new(move |_| {
-        let Some(s) = swept.get() else { return };
+    // The matches shown: the strategy's at the threshold, through the filter.
+    let shown = Memo::new(move |_| {
+        let s = swept.get()?;
         let (kind, t) = (lab.algo.get(), lab.threshold());
-        let Some(canvas) = canvas_ref.get() else { return };
-        if let Ok((_, (pairs, ok))) = current(&s.0.sweep, kind, &t) {
-            draw(&canvas, &s, pairs, ok);
-        }
+        let (_, (pairs, ok)) = current(&s.0.sweep, kind, &t).ok()?;
+        Some(Arc::new(filter_pairs(pairs, ok, filter.get())))
     });
+    Effect::new(move |_| {
+        let (Some(s), Some(m)) = (swept.get(), shown.get()) else { return };
+        let Some(canvas) = canvas_ref.get() else { return };
+        draw(&canvas, &s, layout.get(), &m.0, m.1.as_deref());
+    });
+
+    let pick = Memo::new(move |_| {
+        let [q, t] = picked.get()?;
+        let m = shown.get()?;
+        let index = m.0.iter().position(|&p| p == [q, t])?;
+        let s = swept.get()?;
+        let Swept(_, p, c) = &s;
+        let (a, b) = (p.features.keypoints.get(q as usize)?, c.features.keypoints.get(t as usize)?);
+        let f = fmat.get();
+        let row = explain(&Strategy::Nn(None), &p.features, &c.features, q as usize).ok();
+        let distance = row.and_then(|e| e.ranked.iter().find(|r| r.train_idx == t as usize).map(|r| r.distance));
+        Some(Pick {
+            index,
+            of: m.0.len(),
+            query: q,
+            train: t,
+            distance,
+            sampson: f.map(|f| sampson(&f, [a.x, a.y], [b.x, b.y])),
+            line: f.map(|f| epipolar_line(&f, [a.x, a.y])),
+        })
+    });
+
+    let pick_at = move |ev: web_sys::MouseEvent| {
+        let (Some(s), Some(m), Some(canvas)) =
+            (swept.get_untracked(), shown.get_untracked(), canvas_ref.get_untracked())
+        else {
+            return;
+        };
+        let rect = canvas.get_bounding_client_rect();
+        if rect.width() <= 0.0 {
+            return;
+        }
+        let scale = canvas.width() as f64 / rect.width();
+        let p = ((ev.client_x() as f64 - rect.left()) * scale, (ev.client_y() as f64 - rect.top()) * scale);
+        let Swept(_, pf, cf) = &s;
+        let n = m.0.len().min(MAX_LINES);
+        let i = nearest_match(
+            &m.0[..n],
+            &pf.features.keypoints,
+            &cf.features.keypoints,
+            layout.get_untracked(),
+            pf.width as f64,
+            p,
+            REACH * scale.max(1.0),
+        );
+        picked.set(i.map(|i| m.0[i]));
+    };
+    let on_key = move |ev: web_sys::KeyboardEvent| {
+        let delta = match ev.key().as_str() {
+            "ArrowRight" | "ArrowDown" | "n" => 1,
+            "ArrowLeft" | "ArrowUp" | "p" => -1,
+            "Escape" => {
+                picked.set(None);
+                return;
+            }
+            _ => return,
+        };
+        let Some(m) = shown.get_untracked() else { return };
+        ev.prevent_default();
+        let now = pick.get_untracked().map(|p| p.index);
+        picked.set(step_pick(now, delta, m.0.len().min(MAX_LINES)).map(|i| m.0[i]));
+    };
+
+    // Over the picture: the picked match and its epipolar line.
+    let overlay = move || {
+        let s = swept.get()?;
+        let pk = pick.get()?;
+        let lay = layout.get();
+        let (w, h) = picture_size(&s, lay);
+        let Swept(_, p, c) = &s;
+        let (a, b) = (p.features.keypoints[pk.query as usize], c.features.keypoints[pk.train as usize]);
+        let (pa, pb) = ends(lay, &a, &b, p.width as f64);
+        let dx = if lay == Layout::Side { p.width as f64 } else { 0.0 };
+        let line = pk.line.and_then(|l| clip_line(l, c.width as f64, c.height as f64)).map(|(u, v)| {
+            view! {
+                <line x1=u.0 + dx y1=u.1 x2=v.0 + dx y2=v.1 class="epipolar" stroke=hex(EPIPOLAR.color)
+                    stroke-dasharray=EPIPOLAR.dasharray()/>
+            }
+        });
+        let (fill, stroke, width) = marker_paint(&PICKED, true);
+        Some(view! {
+            <svg class="wf-overlay" viewBox=format!("0 0 {w} {h}") aria-hidden="true" focusable="false">
+                {line}
+                <line x1=pa.0 y1=pa.1 x2=pb.0 y2=pb.1 class="picked-halo"/>
+                <line x1=pa.0 y1=pa.1 x2=pb.0 y2=pb.1 class="picked" stroke=hex(PICKED.color)/>
+                <path d=PICKED.marker.svg_path(&[pb.0 as f32, pb.1 as f32], 7.0) fill=fill stroke=stroke stroke-width=width/>
+            </svg>
+        })
+    };
+
+    let details = move || {
+        let pk = pick.get()?;
+        let s = swept.get()?;
+        let Swept(_, p, c) = &s;
+        let (a, b) = (p.features.keypoints[pk.query as usize], c.features.keypoints[pk.train as usize]);
+        let px = parse_px(&lab.inside.px.get()).unwrap_or(2.0);
+        let fid = lab.frame_id.get();
+        let strategy =
+            Strategy::parse(lab.algo.get().name(), crate::model::parse::parse_threshold(&lab.threshold()).ok()?)
+                .ok()?;
+        let ex = explain(&strategy, &p.features, &c.features, pk.query as usize).ok()?;
+        let nearest = |i: usize| {
+            ex.ranked.get(i).map(|m| format!("d{} = {} (keypoint {})", i + 1, py_f32(m.distance), m.train_idx))
+        };
+        let near = [nearest(0), nearest(1)].into_iter().flatten().collect::<Vec<_>>().join(", ");
+        let verdict = match pk.sampson {
+            Some(d) => {
+                let ok = d <= px;
+                format!(
+                    "Sampson distance to the true epipolar geometry {d:.3} px {} {px} px: {}",
+                    if ok { "≤" } else { ">" },
+                    if ok { "correct" } else { "wrong" }
+                )
+            }
+            None => "no ground-truth poses: not judged".into(),
+        };
+        let q = pk.query as usize;
+        Some(view! {
+            <div
+                class="wf-pick"
+                data-testid="wf-pick"
+                data-query=pk.query
+                data-train=pk.train
+                data-sampson=pk.sampson.map(|d| format!("{d:?}")).unwrap_or_default()
+                data-distance=pk.distance.map(py_f32).unwrap_or_default()
+                role="status"
+            >
+                <p>
+                    <strong>{format!("match {} of {}: ", pk.index + 1, pk.of)}</strong>
+                    {format!(
+                        "keypoint {} at ({:.1}, {:.1}) in frame {} → keypoint {} at ({:.1}, {:.1}) in frame {}, distance {}",
+                        pk.query, a.x, a.y, fid.saturating_sub(1), pk.train, b.x, b.y, fid,
+                        pk.distance.map(py_f32).unwrap_or_else(|| "?".into())
+                    )}
+                </p>
+                <p data-testid="wf-pick-verdict">{verdict}</p>
+                <p>{format!("nearest descriptors of keypoint {}: {near}", pk.query)}</p>
+                <p>{ex.rule()}</p>
+                <p class="muted small">
+                    "← → (or n, p) step through the matches shown · Esc clears · "
+                    <button class="linkish" data-testid="wf-explain" on:click=move |_| lab.set_feature(q)>
+                        {format!("explain feature {q} step by step")}
+                    </button>
+                </p>
+            </div>
+        })
+    };
 
     let counts = move || {
         let r = selection.get()?;
@@ -161,11 +360,12 @@ pub fn WholeFrameView() -> impl IntoView {
             Err(e) => view! { <p class="error" role="alert">{e}</p> }.into_any(),
         })
     };
+    let judged = move || swept.with(|s| s.as_ref().is_some_and(|s| s.0.judged));
 
     view! {
         <div class="whole-frame" data-testid="whole-frame">
             <p class="muted">{move || rule_text(parse_px(&lab.inside.px.get()).unwrap_or(2.0))}</p>
-            <div class="row">
+            <div class="row wrap">
                 <label>
                     "Correct within "
                     <input
@@ -176,12 +376,48 @@ pub fn WholeFrameView() -> impl IntoView {
                     />
                     " px"
                 </label>
+                <fieldset class="seg" data-testid="wf-layout">
+                    <legend>"layout"</legend>
+                    {[(Layout::Flow, "flow on the current frame"), (Layout::Side, "side by side")]
+                        .map(|(l, label)| view! {
+                            <label>
+                                <input type="radio" name="wf-layout" value=l.name()
+                                    data-testid=format!("wf-layout-{}", l.name())
+                                    prop:checked=move || layout.get() == l
+                                    on:change=move |_| layout.set(l)/>
+                                {label}
+                            </label>
+                        })}
+                </fieldset>
+                <fieldset class="seg" data-testid="wf-filter" prop:disabled=move || !judged()>
+                    <legend>"show"</legend>
+                    {Filter::ALL.map(|f| view! {
+                        <label>
+                            <input type="radio" name="wf-filter" value=f.name()
+                                data-testid=format!("wf-filter-{}", f.name())
+                                prop:checked=move || filter.get() == f
+                                on:change=move |_| filter.set(f)/>
+                            {f.name()}
+                        </label>
+                    })}
+                </fieldset>
                 <span class="muted" data-testid="wf-status">{move || status.get()}</span>
             </div>
             {move || error.get().map(|e| view! { <p class="error" role="alert">{e}</p> })}
             {counts}
             <Legend swatches=LEGEND tail="the strategy and threshold are the ones chosen above" dark=true/>
-            <div class="stage"><canvas node_ref=canvas_ref data-testid="wf-canvas"></canvas></div>
+            <div
+                class="stage wf-stage"
+                tabindex="0"
+                role="group"
+                aria-label="Whole-frame matches: click a match, or use the arrow keys, to pick one"
+                data-testid="wf-stage"
+                on:keydown=on_key
+            >
+                <canvas node_ref=canvas_ref data-testid="wf-canvas" on:click=pick_at></canvas>
+                {overlay}
+            </div>
+            {details}
             <TradeoffChart swept=swept/>
         </div>
     }

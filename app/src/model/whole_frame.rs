@@ -1,0 +1,195 @@
+//! The whole-frame view's plain logic: its two layouts, the correct / wrong
+//! filter, which match a click picks, stepping through matches with keys,
+//! and the picked match's epipolar line clipped to the current frame.
+
+use siftlab_core::sift::KeyPoint;
+
+/// How the matches are drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// On the current frame, each match a segment from where its point was
+    /// in the previous frame to where it is now (`match_all --layout flow`).
+    Flow,
+    /// The two frames side by side, previous left (`--layout side`).
+    Side,
+}
+
+impl Layout {
+    pub fn name(self) -> &'static str {
+        match self {
+            Layout::Flow => "flow",
+            Layout::Side => "side",
+        }
+    }
+}
+
+/// Which matches are shown.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Filter {
+    All,
+    Correct,
+    Wrong,
+}
+
+impl Filter {
+    pub const ALL: [Filter; 3] = [Filter::All, Filter::Correct, Filter::Wrong];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Filter::All => "all",
+            Filter::Correct => "correct",
+            Filter::Wrong => "wrong",
+        }
+    }
+
+    fn keeps(self, ok: Option<bool>) -> bool {
+        match (self, ok) {
+            (Filter::All, _) | (_, None) => true,
+            (Filter::Correct, Some(ok)) => ok,
+            (Filter::Wrong, Some(ok)) => !ok,
+        }
+    }
+}
+
+/// The matches the filter keeps, with their verdicts (without verdicts, all).
+pub fn filter_pairs(pairs: &[[u32; 2]], ok: Option<&[bool]>, f: Filter) -> (Vec<[u32; 2]>, Option<Vec<bool>>) {
+    let keep: Vec<usize> = (0..pairs.len()).filter(|&i| f.keeps(ok.map(|o| o[i]))).collect();
+    (keep.iter().map(|&i| pairs[i]).collect(), ok.map(|o| keep.iter().map(|&i| o[i]).collect()))
+}
+
+/// A match's two ends in picture pixels: (previous frame's point, current
+/// frame's point), the current frame offset by `prev_width` side by side.
+pub fn ends(layout: Layout, prev: &KeyPoint, cur: &KeyPoint, prev_width: f64) -> ((f64, f64), (f64, f64)) {
+    let dx = if layout == Layout::Side { prev_width } else { 0.0 };
+    ((prev.x as f64, prev.y as f64), (cur.x as f64 + dx, cur.y as f64))
+}
+
+/// Distance from p to the segment a–b.
+pub fn segment_distance(p: (f64, f64), a: (f64, f64), b: (f64, f64)) -> f64 {
+    let (vx, vy) = (b.0 - a.0, b.1 - a.1);
+    let len2 = vx * vx + vy * vy;
+    let t = if len2 == 0.0 { 0.0 } else { (((p.0 - a.0) * vx + (p.1 - a.1) * vy) / len2).clamp(0.0, 1.0) };
+    let (x, y) = (a.0 + t * vx, a.1 + t * vy);
+    ((p.0 - x).powi(2) + (p.1 - y).powi(2)).sqrt()
+}
+
+/// The index of the match nearest to a click at `p` (picture pixels), if one
+/// lies within `reach` pixels. In the flow layout the current end counts
+/// double, so a click on a point picks the match that ends there.
+pub fn nearest_match(
+    pairs: &[[u32; 2]],
+    prev: &[KeyPoint],
+    cur: &[KeyPoint],
+    layout: Layout,
+    prev_width: f64,
+    p: (f64, f64),
+    reach: f64,
+) -> Option<usize> {
+    let mut best: Option<(f64, usize)> = None;
+    for (i, &[q, t]) in pairs.iter().enumerate() {
+        let (Some(a), Some(b)) = (prev.get(q as usize), cur.get(t as usize)) else { continue };
+        let (pa, pb) = ends(layout, a, b, prev_width);
+        let end = ((p.0 - pb.0).powi(2) + (p.1 - pb.1).powi(2)).sqrt() / 2.0;
+        let d = segment_distance(p, pa, pb).min(end);
+        if d <= reach && best.is_none_or(|(bd, _)| d < bd) {
+            best = Some((d, i));
+        }
+    }
+    best.map(|(_, i)| i)
+}
+
+/// The next index when stepping by `delta` through `n` matches from `cur`
+/// (none picked: the first or the last), wrapping around.
+pub fn step_pick(cur: Option<usize>, delta: i64, n: usize) -> Option<usize> {
+    if n == 0 {
+        return None;
+    }
+    let n = n as i64;
+    Some(match cur {
+        None if delta >= 0 => 0,
+        None => (n - 1) as usize,
+        Some(c) => (c as i64 + delta).rem_euclid(n) as usize,
+    })
+}
+
+/// The line a·x + b·y + c = 0 clipped to the frame [0, w] × [0, h]: its two
+/// ends, or `None` if it misses the frame.
+pub fn clip_line(l: [f64; 3], w: f64, h: f64) -> Option<((f64, f64), (f64, f64))> {
+    let [a, b, c] = l;
+    let mut pts: Vec<(f64, f64)> = Vec::new();
+    let mut push = |x: f64, y: f64| {
+        if (-1e-9..=w + 1e-9).contains(&x)
+            && (-1e-9..=h + 1e-9).contains(&y)
+            && !pts.iter().any(|q| (q.0 - x).abs() + (q.1 - y).abs() < 1e-9)
+        {
+            pts.push((x, y));
+        }
+    };
+    if b != 0.0 {
+        push(0.0, -c / b);
+        push(w, -(a * w + c) / b);
+    }
+    if a != 0.0 {
+        push(-c / a, 0.0);
+        push(-(b * h + c) / a, h);
+    }
+    (pts.len() >= 2).then(|| (pts[0], pts[1]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn kp(x: f32, y: f32) -> KeyPoint {
+        KeyPoint { x, y, size: 2.0, angle: 0.0, response: 0.0, octave: 0 }
+    }
+
+    #[test]
+    fn the_filter_keeps_by_verdict() {
+        let pairs = [[0, 1], [1, 2], [2, 3]];
+        let ok = [true, false, true];
+        assert_eq!(filter_pairs(&pairs, Some(&ok), Filter::Correct), (vec![[0, 1], [2, 3]], Some(vec![true, true])));
+        assert_eq!(filter_pairs(&pairs, Some(&ok), Filter::Wrong), (vec![[1, 2]], Some(vec![false])));
+        assert_eq!(filter_pairs(&pairs, Some(&ok), Filter::All).0.len(), 3);
+        assert_eq!(
+            filter_pairs(&pairs, None, Filter::Wrong),
+            (pairs.to_vec(), None),
+            "no verdicts: nothing to filter by"
+        );
+    }
+
+    #[test]
+    fn a_click_picks_the_nearest_match_within_reach() {
+        let prev = [kp(10.0, 10.0), kp(100.0, 50.0)];
+        let cur = [kp(20.0, 10.0), kp(104.0, 52.0)];
+        let pairs = [[0, 0], [1, 1]];
+        // Flow: on the first segment, near the second's current end.
+        assert_eq!(nearest_match(&pairs, &prev, &cur, Layout::Flow, 200.0, (15.0, 11.0), 5.0), Some(0));
+        assert_eq!(nearest_match(&pairs, &prev, &cur, Layout::Flow, 200.0, (105.0, 53.0), 5.0), Some(1));
+        assert_eq!(nearest_match(&pairs, &prev, &cur, Layout::Flow, 200.0, (60.0, 200.0), 5.0), None);
+        // Side by side: the current end is 200 px to the right.
+        assert_eq!(nearest_match(&pairs, &prev, &cur, Layout::Side, 200.0, (220.0, 10.0), 5.0), Some(0));
+        assert_eq!(segment_distance((5.0, 3.0), (0.0, 0.0), (10.0, 0.0)), 3.0);
+        assert_eq!(segment_distance((-4.0, 3.0), (0.0, 0.0), (10.0, 0.0)), 5.0);
+    }
+
+    #[test]
+    fn keys_step_and_wrap() {
+        assert_eq!(step_pick(None, 1, 3), Some(0));
+        assert_eq!(step_pick(None, -1, 3), Some(2));
+        assert_eq!(step_pick(Some(2), 1, 3), Some(0));
+        assert_eq!(step_pick(Some(0), -1, 3), Some(2));
+        assert_eq!(step_pick(Some(0), 1, 0), None);
+    }
+
+    #[test]
+    fn lines_are_clipped_to_the_frame() {
+        // y = 5 across a 100 × 50 frame.
+        assert_eq!(clip_line([0.0, 1.0, -5.0], 100.0, 50.0), Some(((0.0, 5.0), (100.0, 5.0))));
+        // x = 30.
+        assert_eq!(clip_line([1.0, 0.0, -30.0], 100.0, 50.0), Some(((30.0, 0.0), (30.0, 50.0))));
+        // The diagonal through two corners is found once per corner.
+        assert_eq!(clip_line([1.0, -2.0, 0.0], 100.0, 50.0), Some(((0.0, 0.0), (100.0, 50.0))));
+        assert_eq!(clip_line([0.0, 1.0, 10.0], 100.0, 50.0), None, "y = -10 misses the frame");
+    }
+}
