@@ -570,6 +570,7 @@ test(`odometry with the student's matcher (nndr 0.8, frames 0-${VO_LAST}) equals
   const line = ref.stderr.split('\n').find((l) => l.startsWith(head));
   assert.equal(await page.textContent(tid('vo-metrics')), line.slice(head.length));
   assert.equal(await page.textContent(tid('vo-ate')), `${ref.metrics.ate_rmse.toFixed(4)} m`);
+  assert.equal(await page.textContent(tid('vo-kitti')), ref.stderr.split('\n').find((l) => l.startsWith('KITTI metric: ')));
   metrics.voMatched = (await page.textContent('.trajectory')).match(/over \d+ frames · [\d.]+ s( \([\d.]+ frames\/s\))?/)?.[0];
   // The figures are the core's: the exported SVG is the CLI's --plot, byte for byte
   // (so every position agrees to the plot's 0.01 px).
@@ -588,7 +589,7 @@ test(`odometry with the student's matcher (nndr 0.8, frames 0-${VO_LAST}) equals
   await page.elementScreenshot('.trajectory .vo-views', shot('vo-matched.png'));
 });
 
-test(`comparison view: LK, dt 200, nn, nndr 0.8 on frames 0-${VO_LAST}, metrics equal the CLI's`, async () => {
+test(`comparison view: LK, dt 200, nn, nndr 0.8 on frames 0-${VO_LAST}, metrics (KITTI included) equal the CLI's`, async () => {
   await page.goto(`${BASE}?lanes=${LANES}`);
   await idle();
   await page.fill(tid('vo-frame-id'), String(VO_LAST));
@@ -606,9 +607,16 @@ test(`comparison view: LK, dt 200, nn, nndr 0.8 on frames 0-${VO_LAST}, metrics 
   for (const r of rows) {
     const m = cliTrajectory([...args[r[0]], String(VO_LAST)]).metrics;
     assert.deepEqual(r.slice(1, 5), [m.ate_rmse.toFixed(4), m.ate_rmse_aligned.toFixed(4), m.rpe_trans_rmse.toFixed(4), m.rpe_rot_rmse_deg.toFixed(4)], r[0]);
-    assert.deepEqual(r.slice(5, 7), ['n/a', 'n/a'], `${r[0]}: under 100 m of path, no KITTI segment`);
+    // Frames 0–150 hold 110 m of path: the KITTI figures rest on two 100 m segments
+    // (fewer than 100 m, as with a short WebKit run: none, n/a).
+    const kitti = m.kitti_segments > 0 ? [m.kitti_t_err_pct.toFixed(2), m.kitti_r_err_deg_per_100m.toFixed(3)] : ['n/a', 'n/a'];
+    assert.deepEqual(r.slice(5, 7), kitti, `${r[0]}: KITTI on ${m.kitti_segments} segments`);
     metrics.compareFps[r[0]] = Number(r[7]);
   }
+  const note = await page.textContent(tid('vo-compare-kitti'));
+  const seg = cliTrajectory([String(VO_LAST)]).stderr.split('\n').find((l) => l.startsWith('KITTI metric: '));
+  assert.ok(note.startsWith(seg), `${note} / ${seg}`);
+  metrics.compareKitti = seg;
   // Truth and four runs overlaid, with a legend naming them.
   const svg = await page.innerHTML(tid('vo-compare-plot'));
   for (const name of ['ground truth', 'LK', 'dt 200', 'nn', 'nndr 0.8']) assert.ok(svg.includes(`>${name}</text>`), name);

@@ -50,6 +50,22 @@ impl RunResult {
     }
 }
 
+/// The line the CLI prints under its metrics, for the first `n` true poses:
+/// how many segments the KITTI figures rest on, and the true path's length
+/// ("KITTI metric: 2 segments of 100 m (true path 109.9 m)").
+pub fn kitti_note(poses: &[siftlab_core::dataset::PoseRow]) -> String {
+    use siftlab_core::dataset::{dist3, position};
+    use siftlab_core::vo::{describe_kitti_segments, kitti_segments};
+    let path: f64 = poses.windows(2).map(|w| dist3(&position(&w[0]), &position(&w[1]))).sum();
+    format!("KITTI metric: {} (true path {path:.1} m)", describe_kitti_segments(&kitti_segments(poses)))
+}
+
+/// [`kitti_note`] from the poses file's text, for frames 0 … n − 1.
+pub fn kitti_note_text(poses: &str, n: usize) -> Option<String> {
+    let rows = siftlab_core::dataset::parse_poses(poses).ok()?;
+    (rows.len() >= n).then(|| kitti_note(&rows[..n]))
+}
+
 /// One row of the metrics table: run, ATE, aligned ATE, RPE (m, °), KITTI
 /// (%, °/100 m; "n/a" under 100 m of path), frames/s.
 pub fn metric_cells(name: &str, m: &TrajectoryMetrics, ms: f64) -> [String; 8] {
@@ -91,6 +107,20 @@ pub fn error_hover_text(frame: f64, runs: &[(String, Vec<f64>)]) -> Option<Strin
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A straight drive, 1 m a frame: segments of 100 m start every 10th
+    /// frame while more than 100 m of path remain (the devkit ends a segment
+    /// at the first frame past its length: frame 50 has exactly 100 m left).
+    #[test]
+    fn the_kitti_note_counts_segments_and_path() {
+        let text: String = (0..200).map(|i| format!("1 0 0 0 0 1 0 0 0 0 1 {i}\n")).collect();
+        assert_eq!(kitti_note_text(&text, 151).unwrap(), "KITTI metric: 5 segments of 100 m (true path 150.0 m)");
+        assert_eq!(
+            kitti_note_text(&text, 100).unwrap(),
+            "KITTI metric: no segment of 100 m or more (true path 99.0 m)"
+        );
+        assert_eq!(kitti_note_text(&text, 201), None, "more frames than poses");
+    }
 
     #[test]
     fn trackers_and_thresholds() {

@@ -67,6 +67,8 @@ pub fn TrajectoryView() -> impl IntoView {
     let strategy_run = RwSignal::new(None::<siftlab_core::matching::Strategy>);
     let metrics = RwSignal::new(None::<TrajectoryMetrics>);
     let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
+    // The run's ground-truth poses (the poses file's text), for the KITTI note.
+    let poses_text = StoredValue::new(String::new());
     // When the workers got the frames: the live rate counts from there.
     let started_ms = StoredValue::new(0.0f64);
     // Frames 0, 1, 2, … with no gap: the demo's 119, 120, 149, 150 are not part of it.
@@ -111,12 +113,12 @@ pub fn TrajectoryView() -> impl IntoView {
                 }
             };
             frames.set_value(fr.clone());
+            poses_text.set_value(poses.clone());
             started_ms.set_value(crate::platform::now_ms());
             let on_event = move |m| match m {
                 VoReply::Step { frame, position, truth, counts, detail, .. } => {
                     steps.update(|s| s.push((frame, position, truth)));
-                    frame_steps
-                        .update(|s| s.push(FrameStep { counts, detail: detail.map(|d| std::sync::Arc::from(d)) }));
+                    frame_steps.update(|s| s.push(FrameStep { counts, detail: detail.map(std::sync::Arc::from) }));
                 }
                 VoReply::Metrics { metrics: m, .. } => metrics.set(Some(TrajectoryMetrics::from_array(&m))),
                 VoReply::Done { ate, png, ms, kitti, .. } => {
@@ -240,7 +242,14 @@ pub fn TrajectoryView() -> impl IntoView {
                 </p>
                 <p class="muted small" data-testid="vo-workers">{workers_text()}</p>
             })}
-            {move || metrics.get().map(|m| view! { <p class="small" data-testid="vo-metrics">{m.summary()}</p> })}
+            {move || metrics.get().map(|m| {
+                let n = steps.with(|s| s.len());
+                let note = poses_text.with_value(|p| crate::model::odometry::kitti_note_text(p, n));
+                view! {
+                    <p class="small" data-testid="vo-metrics">{m.summary()}</p>
+                    {note.map(|t| view! { <p class="small muted" data-testid="vo-kitti">{t}</p> })}
+                }
+            })}
             <VoCompare source=source count=count/>
         </section>
     }

@@ -4,7 +4,7 @@
 
 use super::vo_plot::VoFigures;
 use crate::model::lab::Source;
-use crate::model::odometry::{compare_runs, metric_cells, RunResult};
+use crate::model::odometry::{compare_runs, kitti_note_text, metric_cells, RunResult};
 use crate::platform::{blob_url, revoke};
 use crate::protocol::odometry::VoReply;
 use crate::services::loading;
@@ -166,7 +166,7 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
             <p class="muted">
                 "The same loop four times on the same frames, side by side (each frame's SIFT is computed once and shared): the lab's Lucas–Kanade tracking, and SIFT matching of consecutive frames "
                 "with dt 200, nn and nndr 0.8 (each query's nearest match feeds findEssentialMat). ATE: position error, raw and after the best rigid "
-                "alignment; RPE: error of each frame-to-frame motion; KITTI: the benchmark's error per 100–800 m segment (n/a under 100 m of path); frames/s: each run's pace with all four running at once."
+                "alignment; RPE: error of each frame-to-frame motion; KITTI: the benchmark's error per 100–800 m segment, from every 10th frame (n/a under 100 m of path); frames/s: each run's pace with all four running at once."
             </p>
             <button class="primary" data-testid="vo-compare-run" on:click=run prop:disabled=move || ctx.running.get()>
                 "Run all four"
@@ -186,6 +186,17 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
                         <tbody>{rows}</tbody>
                     </table>
                 </div>
+                {move || {
+                    let done = ctx.results.with(|r| r.iter().any(|r| r.metrics.is_some()));
+                    let n = ctx.frames.with_value(|f| f.len());
+                    let note = done.then(|| ctx.poses.with_value(|p| kitti_note_text(p, n))).flatten()?;
+                    Some(view! {
+                        <p class="small" data-testid="vo-compare-kitti">
+                            {note}
+                            " — each segment is one stretch of true path scored as a whole, so with this few the KITTI figures are a rough guide; ATE and RPE use every frame."
+                        </p>
+                    })
+                }}
             </Show>
         </div>
     }

@@ -27,8 +27,11 @@ const LEGEND: &[Sw] = &[
     Sw { style: REDETECTED, line: false, outline: true, label: " re-detected point (on demand) ·" },
 ];
 
+/// A chart series: its name, its style and the count it plots.
+type Series = (&'static str, Style, fn(&StepCounts) -> u32);
+
 /// The chart's three series: tracked points, RANSAC inliers, recoverPose's count.
-const SERIES: [(&str, Style, fn(&StepCounts) -> u32); 3] = [
+const SERIES: [Series; 3] = [
     ("tracked / matched", TRACKERS[1], |c| c.tracked),
     ("RANSAC inliers", Style { color: SKY_BLUE, ..INLIER }, |c| c.essential_inliers),
     ("recoverPose", TRACKERS[2], |c| c.pose_inliers),

@@ -27,7 +27,10 @@ pub use export::{kitti_rows_text, kitti_text, tum_text};
 pub use linalg::{det3, mat_mul, mat_vec, skew, transpose, Mat3, Vec3, IDENTITY};
 pub use lk::{calc_optical_flow_pyr_lk, LkParams, LkResult};
 pub use matched::{matched_points, run_matched, MatchedOdometry};
-pub use metrics::{ate_rmse, evaluate, max_median, position_differences, TrajectoryMetrics};
+pub use metrics::{
+    ate_rmse, describe_kitti_segments, evaluate, kitti_segments, max_median, position_differences, KittiSegment,
+    TrajectoryMetrics,
+};
 pub use odometry::{pose_row, run, sift_detector, Odometry, StepDetail, StepResult, Steps};
 pub use ransac::{find_essential_mat, EssentialResult, RansacParams};
 pub use recover_pose::{recover_pose, Pose};

@@ -539,8 +539,10 @@ mod tests {
     #[test]
     fn detail_matches_the_counts() {
         let cam = Camera { fx: 300.0, fy: 300.0, cx: 160.0, cy: 120.0 };
-        let (mut plain, mut rec) =
-            (Odometry::with_detector(cam, Box::new(grid)).unwrap(), Odometry::with_detector(cam, Box::new(grid)).unwrap());
+        let (mut plain, mut rec) = (
+            Odometry::with_detector(cam, Box::new(grid)).unwrap(),
+            Odometry::with_detector(cam, Box::new(grid)).unwrap(),
+        );
         plain.min_points = 10_000;
         rec.min_points = 10_000;
         rec.record_detail = true;
@@ -555,7 +557,10 @@ mod tests {
             assert_eq!(count(&d.essential_mask), a.essential_inliers);
             assert_eq!(count(&d.pose_mask), a.pose_inliers);
             assert_eq!(d.detected.len(), if a.redetected { a.points_out } else { 0 });
-            assert!(d.pose_mask.iter().zip(&d.essential_mask).all(|(&p, &e)| !p || e), "recoverPose counts RANSAC inliers only");
+            assert!(
+                d.pose_mask.iter().zip(&d.essential_mask).all(|(&p, &e)| !p || e),
+                "recoverPose counts RANSAC inliers only"
+            );
         }
     }
 
