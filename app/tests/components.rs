@@ -14,11 +14,12 @@ use siftlab_app::model::frame::FrameData;
 use siftlab_app::model::lab::{analyse, nearest_keypoint, Lab, Source};
 use siftlab_app::model::urlstate::UrlState;
 use siftlab_app::page::{apply_url, url_state, Explorer, DEMO_FEATURE};
-use siftlab_app::protocol::odometry::{VoReply, VoRequest};
+use siftlab_app::protocol::odometry::{StepCounts, VoReply, VoRequest};
 use siftlab_app::protocol::sift::{SiftReply, SiftRequest, SiftResult};
 use siftlab_app::protocol::{is_ready, ready_js, Request};
 use siftlab_core::matching::StrategyKind;
 use siftlab_core::sift::{Features, KeyPoint};
+use siftlab_core::vo::StepDetail;
 use std::sync::Arc;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_test::*;
@@ -430,10 +431,24 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
             total: 6,
             position: [0.5, -0.25, 1.75],
             truth: Some([0.0, 0.0, 2.0]),
-            tracked: 1400,
-            redetected: true,
+            counts: StepCounts { points_in: 1500, tracked: 2, essential_inliers: 1, pose_inliers: 1, redetected: true },
+            detail: Some(Box::new(StepDetail {
+                prev: vec![[1.5, 2.25], [3.0, 4.0]],
+                cur: vec![[1.0, 2.0], [3.5, 4.5]],
+                essential_mask: vec![true, false],
+                pose_mask: vec![true, false],
+                detected: vec![[7.0, 8.0]],
+            })),
         },
-        VoReply::Step { id: 5, frame: 0, total: 6, position: [0.0; 3], truth: None, tracked: 0, redetected: false },
+        VoReply::Step {
+            id: 5,
+            frame: 0,
+            total: 6,
+            position: [0.0; 3],
+            truth: None,
+            counts: StepCounts::default(),
+            detail: None,
+        },
         VoReply::Done { id: 5, ate: 0.2815, png: vec![137, 80, 78, 71], ms: 1234.5, kitti: "1 0 0 0\n".into() },
         VoReply::Metrics { id: 5, metrics: [100.0, 1.1, 0.14, 0.13, 0.12, f64::NAN, f64::NAN] },
     ] {
