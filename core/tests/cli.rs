@@ -496,11 +496,11 @@ fn view_trajectory_counts_frames_as_the_lab_does() {
     assert!(png.exists());
 
     // Beyond the bundled run of frames: which frames exist, and what to ask for.
-    let o = siftlab(&["-d", ds.to_str().unwrap(), "view_trajectory", "150", "--output", png.to_str().unwrap()]);
+    let o = siftlab(&["-d", ds.to_str().unwrap(), "view_trajectory", "151", "--output", png.to_str().unwrap()]);
     assert_fails(
         &o,
-        &["frames 0 to 150", "frames 0 to 99 only", "000100.png", "FRAME_ID 99 or less"],
-        "view_trajectory 150",
+        &["frames 0 to 151", "frames 0 to 150 only", "000151.png", "FRAME_ID 150 or less"],
+        "view_trajectory 151",
     );
     let _ = fs::remove_dir_all(&dir);
 }
