@@ -24,6 +24,8 @@ wasm_bindgen_test_configure!(run_in_browser);
 
 fn png(id: u32) -> &'static [u8] {
     match id {
+        100 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000100.png"),
+        101 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000101.png"),
         119 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000119.png"),
         120 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000120.png"),
         149 => include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000149.png"),
