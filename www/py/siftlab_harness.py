@@ -131,6 +131,12 @@ _student_builtins["__import__"] = _guarded_import
 class _Pair:
     __slots__ = ("id", "kp1", "data1", "n1", "kp2", "data2", "n2")
 
+    def images(self):
+        """(previous, current) as images the shim's SIFT knows: for the base class's
+        featureMatching(cur_image, prev_image) / featureInfo, which marking does not call."""
+        return (cv2.Frame("%s/1" % self.id, self.kp1, self.data1, self.n1),
+                cv2.Frame("%s/2" % self.id, self.kp2, self.data2, self.n2))
+
 
 class _State:
     def __init__(self):
