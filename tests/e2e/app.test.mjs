@@ -265,19 +265,19 @@ test('a link to the manual\'s Task 1 tuple opens on it, with the comparison', as
 });
 
 test('a link to frames the demo lacks says which, and the app stays usable', async () => {
-  await page.goto(`${BASE}?src=demo&frame=130&feature=5`);
+  await page.goto(`${BASE}?src=demo&frame=160&feature=5`);
   await page.waitForSelector(tid('error'));
   assert.match(await page.textContent(tid('error')),
-    /FRAME_ID 130 needs frames 129 and 130: frames 129 and 130 are not in the demo, which has frames 0–99, 119, 120, 149, 150/);
+    /FRAME_ID 160 needs frames 159 and 160: frames 159 and 160 are not in the demo, which has frames 0–150/);
   // Nothing else is shown under the link's settings, and the link stays as it was.
   assert.equal(await page.has(tid('keypoint-count-cur')), false);
-  assert.equal(await page.inputValue(tid('frame-id')), '130');
-  assert.match(await page.url(), /frame=130/);
+  assert.equal(await page.inputValue(tid('frame-id')), '160');
+  assert.match(await page.url(), /frame=160/);
   await page.screenshot(shot('missing-frame.png'));
   // One of the two missing.
-  await page.goto(`${BASE}?src=demo&frame=119`);
+  await page.goto(`${BASE}?src=demo&frame=151`);
   await page.waitForSelector(tid('error'));
-  assert.match(await page.textContent(tid('error')), /FRAME_ID 119 needs frames 118 and 119: frame 118 is not in the demo, which has frames 0–99, 119, 120, 149, 150/);
+  assert.match(await page.textContent(tid('error')), /FRAME_ID 151 needs frames 150 and 151: frame 151 is not in the demo, which has frames 0–150/);
   // Usable: a FRAME_ID the demo has loads, and the message goes.
   await page.fill(tid('frame-id'), '120');
   await page.press(tid('frame-id'), 'Enter');
@@ -374,10 +374,10 @@ test('bad files and folders show an inline error and keep what was loaded', asyn
   await page.waitForSelector(tid('error'), { state: 'detached', timeout: 60000 });
   await idle();
   assert.equal(await tuple(), cliRet(['-a', 'nndr', '-t', '0.8', '1', '42']));
-  await page.fill(tid('frame-id'), '130');
+  await page.fill(tid('frame-id'), '160');
   await page.press(tid('frame-id'), 'Enter');
   await page.waitForFunction((sel) => (document.querySelector(sel)?.textContent || '').includes(
-    'FRAME_ID 130 needs frames 129 and 130: frames 129 and 130 are not in the folder, which has frames 0–99, 119, 120, 149, 150'), tid('error'));
+    'FRAME_ID 160 needs frames 159 and 160: frames 159 and 160 are not in the folder, which has frames 0–150'), tid('error'));
   await page.fill(tid('frame-id'), '3');
   await page.press(tid('frame-id'), 'Enter');
   await page.waitForFunction(() => /000003\.png/.test(document.querySelector('.slots')?.textContent || ''), undefined, { timeout: 180000 });
@@ -730,5 +730,82 @@ test('see inside: whole-frame counts and SIFT anatomy equal the CLI (match_all, 
   await page.waitForSelector(tid('orientation-hist'), { timeout: 180000 });
   metrics.anatomyStatus = (await page.textContent(tid('anatomy-status'))).trim();
   await page.elementScreenshot('.see-inside', shot('anatomy.png'));
+  fs.rmSync(tmp, { recursive: true });
+});
+
+// "Mark my code": the student's file in Pyodide, marked as the CLI's `siftlab mark` marks
+// it on the same cases (seed and count in the link). Slow engines get fewer calls.
+const MARK_N = Number(process.env.E2E_MARK_N || (ENGINE === 'webkit' ? 1 : 3));
+const MARKS = path.join(ROOT, 'tests/fixtures/mark');
+function cliMark(variant, n, seed) {
+  const r = spawnSync(CLI, ['--opencv-lanes', String(LANES), '-d', DATASET, 'mark', path.join(MARKS, variant, 'vision_tasks.py'),
+    '-n', String(n), '--seed', String(seed), '--json'], { cwd: ROOT, encoding: 'utf8', maxBuffer: 1 << 26 });
+  return JSON.parse(r.stdout);
+}
+async function markFile(variant, n, seed, { file } = {}) {
+  await page.goto(`${BASE}?lanes=${LANES}&mark=${seed}&mn=${n}`);
+  await idle();
+  await page.setInputFiles(tid('mark-file'), file || path.join(MARKS, variant, 'vision_tasks.py'));
+  await page.waitForFunction((sel) => document.querySelector(sel).value.length > 0 || true, tid('mark-source'));
+  await page.waitForFunction((sel) => !document.querySelector(sel).disabled, tid('mark-run'), { timeout: 10000 }).catch(() => {});
+  const t0 = Date.now();
+  await page.click(tid('mark-run'));
+  await page.waitForSelector(`${tid('mark-report')}, ${tid('mark-error')}`, { timeout: 900000 });
+  return (Date.now() - t0) / 1000;
+}
+async function pageMarks() {
+  const rows = await page.evalAll(tid('mark-row'), (tr) => [tr.dataset.task, tr.dataset.marks, tr.dataset.correct, tr.dataset.errors]);
+  const total = await page.getAttribute(tid('mark-total'), 'data-total');
+  const diagnoses = await page.evalAll(tid('mark-failure'), (li) => `${li.dataset.task}:${li.dataset.diagnosis}`);
+  return { rows, total, diagnoses };
+}
+function cliMarks(j) {
+  return {
+    rows: j.tasks.map((t) => [t.task, t.marks.toFixed(2), String(t.correct), String(t.errors)]),
+    total: j.total.toFixed(2),
+    diagnoses: j.results.filter((r) => r.status !== 'correct').map((r) => `${r.task}:${r.diagnosis}`),
+  };
+}
+
+test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI marks them (${MARK_N} calls per task)`, async () => {
+  const s = await markFile('good', MARK_N, 1);
+  metrics.markGoodS = s;
+  metrics.markTiming = await page.textContent(tid('mark-timing'));
+  const got = await pageMarks();
+  assert.equal(got.total, '20.00', JSON.stringify(got));
+  assert.deepEqual(got, cliMarks(cliMark('good', MARK_N, 1)));
+  await page.elementScreenshot(tid('mark'), shot('mark-good.png'));
+  await markFile('inverted', MARK_N, 1);
+  const bad = await pageMarks();
+  assert.deepEqual(bad, cliMarks(cliMark('inverted', MARK_N, 1)));
+  assert.ok(bad.diagnoses.some((d) => d.startsWith('nndr:')), JSON.stringify(bad));
+  await page.elementScreenshot(tid('mark'), shot('mark-nndr-inverted.png'));
+});
+
+test('mark my code: an endless loop is stopped at 10 s and the page stays usable; bad files get messages', async () => {
+  // One call per task: the loop's nndr call runs into the 10 s limit, the worker is
+  // replaced, and matching_info is marked after it.
+  await markFile('loop', 1, 2);
+  const got = await pageMarks();
+  assert.deepEqual(got, cliMarks(cliMark('loop', 1, 2)));
+  assert.ok(got.diagnoses.includes('nndr:timeout'), JSON.stringify(got));
+  assert.equal(got.rows.find((r) => r[0] === 'matching_info')[1], '5.00', 'marked after the restart');
+  // Files the lab refuses: a clear message, no run, the page usable.
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-mark-'));
+  const cases = [
+    ['empty', Buffer.alloc(0)],
+    ['binary', Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13])],
+    ['too_large', Buffer.alloc(1 << 20 | 1, 0x61)],
+    ['not_ascii', fs.readFileSync(path.join(MARKS, 'nonascii', 'vision_tasks.py'))],
+  ];
+  for (const [what, bytes] of cases) {
+    const file = path.join(tmp, `${what}.py`);
+    fs.writeFileSync(file, bytes);
+    await markFile('good', 1, 0, { file });
+    const code = await page.getAttribute(tid('mark-rejected'), 'data-code');
+    assert.ok(code, what);
+    assert.equal(await page.getAttribute(tid('mark-total'), 'data-total'), '0.00', what);
+    metrics[`markRejected_${what}`] = await page.textContent(tid('mark-rejected'));
+  }
   fs.rmSync(tmp, { recursive: true });
 });
