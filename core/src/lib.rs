@@ -20,6 +20,7 @@ pub mod error;
 mod gray_png;
 pub mod image;
 pub mod manual;
+pub mod mark;
 pub mod matching;
 mod par;
 pub mod pyfmt;

@@ -39,6 +39,23 @@ pub enum Command {
     /// Every match of frame FRAME_ID-1 into FRAME_ID, judged by the true geometry; writes matches.png.
     #[command(name = "match_all")]
     MatchAll(MatchAllArgs),
+    /// Mark a student's vision_tasks.py as the lab's automarker does (runs it with python3).
+    Mark(MarkArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct MarkArgs {
+    /// The student's vision_tasks.py.
+    pub file: PathBuf,
+    /// Calls per task (the lab's marking: 25).
+    #[arg(short = 'n', long = "cases", default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub n: u32,
+    /// The seed the cases are drawn from (the same seed, dataset and n give the same cases).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Print the report as JSON.
+    #[arg(long)]
+    pub json: bool,
 }
 
 #[derive(Args, Debug)]

@@ -6,6 +6,7 @@
 pub mod anatomy;
 pub mod args;
 pub mod common;
+pub mod mark;
 pub mod match_all;
 pub mod trajectory;
 pub mod visual;
@@ -16,7 +17,7 @@ use crate::matching::args::parse_index;
 use crate::matching::{match_feature, matching_info, MatchInfo, Strategy};
 use crate::pyfmt::{py_float, py_str};
 use crate::sift::{detect_and_compute, Features};
-pub use args::{AnatomyArgs, Cli, Command, MatchAllArgs, MatchArgs, SiftArgs, TrajectoryArgs};
+pub use args::{AnatomyArgs, Cli, Command, MarkArgs, MatchAllArgs, MatchArgs, SiftArgs, TrajectoryArgs};
 use clap::Parser;
 pub use common::frame_path;
 use common::{expand_home, load_frame, parse_threshold, sift_params, MatchContext};
@@ -39,6 +40,10 @@ pub fn main() -> i32 {
                 return 2;
             }
         }
+    }
+    // mark's exit status says whether the file got full marks.
+    if let Command::Mark(a) = &cli.command {
+        return mark::main(&cli, a);
     }
     match run(&cli) {
         Ok(()) => 0,
@@ -120,6 +125,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Sift(a) => run_sift(cli, a),
         Command::Anatomy(a) => anatomy::run(&a.image, &sift_params(cli), a.json, a.out.as_deref()),
         Command::MatchAll(a) => match_all::run(cli, a),
+        Command::Mark(a) => mark::run(cli, a).map(|_| ()),
     }
 }
 

@@ -1,0 +1,38 @@
+//! Marking a student's `vision_tasks.py` as the lab's automarker does
+//! (docs/marking.md): the cases from a seed, the messages to and from the
+//! Python harness (`www/py/siftlab_harness.py`), the reference values,
+//! the comparison and diagnosis of each case, the 20 marks and the report.
+//! No I/O here: the CLI (`siftlab mark`) and the app's worker run the
+//! harness and carry the messages.
+//!
+//! A marking, in order:
+//! 1. [`check_source`] on the file's bytes (a [`Rejection`] scores 0:
+//!    [`Marks::rejected`]);
+//! 2. [`plan`] the cases; send [`load_message`] and read its reply with
+//!    [`parse_reply`] (an error is a [`Rejection::Load`]);
+//! 3. for each case: its [`reference`] value on its pair; the pair sent
+//!    once with [`pair_message`]; [`call_message`]; then read lines with
+//!    [`parse_line`] until the reply, answering each knn request with
+//!    [`knn_answer`]; [`judge`] the reply (or [`failed_call`] for a time-out
+//!    or a crash);
+//! 4. [`Marks::new`] on the results; [`report_text`] / [`report_json`].
+
+mod b64;
+mod cases;
+mod diagnose;
+mod json;
+mod protocol;
+mod reference;
+mod report;
+mod source;
+
+pub use b64::{base64, unbase64};
+pub use cases::{plan, threshold_text, Case, Task, DEFAULT_CASES, NUM_FEATURES};
+pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Status};
+pub use json::{parse as parse_json, Json};
+pub use protocol::{
+    call_message, knn_answer, load_message, pair_message, parse_line, parse_reply, ErrorKind, HarnessLine, Pair, Reply,
+};
+pub use reference::{reference, Expected};
+pub use report::{report_json, report_text, Marks, TaskMarks};
+pub use source::{check_source, Rejection, MAX_SOURCE_BYTES};

@@ -1,0 +1,456 @@
+//! The messages between the host (the CLI, or the app's worker) and
+//! `www/py/siftlab_harness.py`, one JSON object a line (docs/marking.md
+//! §Messages), and the host's answer to the harness's `knnMatch` requests.
+
+use super::b64::{base64, unbase64};
+use super::cases::Case;
+use super::json::{parse, push_str, quote, Json};
+use super::reference::{info_json, Expected};
+use crate::matching::knn_match;
+use crate::pyfmt::py_f32;
+use crate::sift::{Features, KeyPoint};
+use std::fmt::Write as _;
+
+/// A frame pair the harness has been sent: `prev` (FRAME_ID-1) is the
+/// query side (kp1/des1), `cur` the train side.
+#[derive(Clone, Debug, Default)]
+pub struct Pair {
+    pub id: u32,
+    pub prev: Features,
+    pub cur: Features,
+}
+
+/// `{"op": "load", "source": …}`: the student's file.
+pub fn load_message(source: &str) -> String {
+    format!("{{\"op\": \"load\", \"source\": {}}}", quote(source))
+}
+
+/// `{"op": "pair", "id", "kp1", "des1", "kp2", "des2"}`: keypoints as
+/// `[x, y, size, angle, response, octave]` (each f32 printed exactly),
+/// descriptors as base64 of their N×128 bytes.
+pub fn pair_message(id: u32, prev: &Features, cur: &Features) -> String {
+    let mut s = String::with_capacity(16 * 128 * (prev.descriptors.len() + cur.descriptors.len()) / 12 + 1024);
+    let _ = write!(s, "{{\"op\": \"pair\", \"id\": {id}");
+    for (name, f) in [("1", prev), ("2", cur)] {
+        let _ = write!(s, ", \"kp{name}\": ");
+        push_keypoints(&mut s, &f.keypoints);
+        let _ = write!(s, ", \"des{name}\": \"{}\"", base64(f.descriptors.as_flattened()));
+    }
+    s.push('}');
+    s
+}
+
+fn push_keypoints(s: &mut String, kps: &[KeyPoint]) {
+    s.push('[');
+    for (i, k) in kps.iter().enumerate() {
+        if i > 0 {
+            s.push_str(", ");
+        }
+        let _ = write!(
+            s,
+            "[{}, {}, {}, {}, {}, {}]",
+            py_f32(k.x),
+            py_f32(k.y),
+            py_f32(k.size),
+            py_f32(k.angle),
+            py_f32(k.response),
+            k.octave
+        );
+    }
+    s.push(']');
+}
+
+/// `{"op": "call", "fn", "pair", …}`: dt / nn / nndr with `threshold`
+/// (null for None) and `"compact": true` (the lists come back as base64
+/// arrays); matching_info with `matches` as `[[q, t, d], …]`, the reference
+/// matches of the case, and `expected`, the reference tuple as JSON, which
+/// the harness compares with the returned value by Python's `==`.
+pub fn call_message(case: &Case, pair: u32, expected: &Expected) -> String {
+    let name = case.task().name();
+    match (case, expected) {
+        (Case::Info { .. }, Expected::Info { matches, info }) => {
+            let mut s = format!("{{\"op\": \"call\", \"fn\": \"{name}\", \"pair\": {pair}, \"matches\": [");
+            for (i, m) in matches.iter().enumerate() {
+                if i > 0 {
+                    s.push_str(", ");
+                }
+                let _ = write!(s, "[{}, {}, {}]", m.query_idx, m.train_idx, py_f32(m.distance));
+            }
+            s.push_str("], \"expected\": ");
+            info_json(info).write(&mut s);
+            s.push('}');
+            s
+        }
+        _ => {
+            let t = case.strategy().threshold();
+            let t = t.map_or("null".to_string(), crate::pyfmt::py_float);
+            format!("{{\"op\": \"call\", \"fn\": \"{name}\", \"pair\": {pair}, \"threshold\": {t}, \"compact\": true}}")
+        }
+    }
+}
+
+/// What a failed `load` or `call` was, as the harness names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ErrorKind {
+    /// The file does not compile.
+    Syntax,
+    /// It imports a module the lab's Python does not have.
+    Import,
+    /// An exception.
+    Runtime,
+    /// A return value of the wrong type or shape.
+    Type,
+    /// The harness refused the request itself (a fault of siftlab's).
+    Protocol,
+}
+
+impl ErrorKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            ErrorKind::Syntax => "syntax",
+            ErrorKind::Import => "import",
+            ErrorKind::Runtime => "runtime",
+            ErrorKind::Type => "type",
+            ErrorKind::Protocol => "protocol",
+        }
+    }
+}
+
+/// The harness's answer to `load`, `pair` or `call`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Reply {
+    /// `{"ok": VALUE}`; for matching_info also `"repr"` (Python's repr of
+    /// the value) and `"equal"` (whether it `==` the expected tuple).
+    Ok { value: Json, repr: Option<String>, equal: Option<bool> },
+    /// `{"error": MSG, "kind": KIND}` (an unknown kind is a runtime error).
+    Error { message: String, kind: ErrorKind },
+}
+
+/// One line from the harness.
+#[derive(Clone, Debug, PartialEq)]
+pub enum HarnessLine {
+    Reply(Reply),
+    /// `{"op": "knn", …}`: answer it with [`knn_answer`] on the same line.
+    Knn,
+}
+
+/// Reads a line the harness wrote: a reply or a knn request.
+pub fn parse_line(line: &str) -> crate::Result<HarnessLine> {
+    let v = parse(line).map_err(|e| bad_line(line, &e))?;
+    if v.get("op").and_then(Json::as_str) == Some("knn") {
+        return Ok(HarnessLine::Knn);
+    }
+    reply_of(v).map(HarnessLine::Reply).map_err(|e| bad_line(line, &e))
+}
+
+/// Reads a reply line (a knn request here is an error).
+pub fn parse_reply(line: &str) -> crate::Result<Reply> {
+    match parse_line(line)? {
+        HarnessLine::Reply(r) => Ok(r),
+        HarnessLine::Knn => Err(bad_line(line, "a knn request where a reply was expected")),
+    }
+}
+
+fn bad_line(line: &str, why: &str) -> crate::Error {
+    let mut shown: String = line.chars().take(200).collect();
+    if shown.len() < line.len() {
+        shown.push('…');
+    }
+    crate::Error::InvalidArgument(format!("the harness sent a line siftlab cannot read ({why}): {shown}"))
+}
+
+fn reply_of(v: Json) -> Result<Reply, String> {
+    let Json::Obj(kv) = v else {
+        return Err("not a JSON object".into());
+    };
+    let mut value = None;
+    let mut repr = None;
+    let mut equal = None;
+    let mut message = None;
+    let mut kind = None;
+    for (k, v) in kv {
+        match k.as_str() {
+            "ok" => value = Some(v),
+            "repr" => repr = v.as_str().map(str::to_string),
+            "equal" => {
+                if let Json::Bool(b) = v {
+                    equal = Some(b)
+                }
+            }
+            "error" => message = Some(v.as_str().map_or_else(|| v.py_repr(), str::to_string)),
+            "kind" => kind = v.as_str().map(str::to_string),
+            _ => {}
+        }
+    }
+    if let Some(message) = message {
+        let kind = match kind.as_deref() {
+            Some("syntax") => ErrorKind::Syntax,
+            Some("import") => ErrorKind::Import,
+            Some("type") => ErrorKind::Type,
+            Some("protocol") => ErrorKind::Protocol,
+            _ => ErrorKind::Runtime,
+        };
+        return Ok(Reply::Error { message, kind });
+    }
+    match value {
+        Some(value) => Ok(Reply::Ok { value, repr, equal }),
+        None => Err("neither \"ok\" nor \"error\"".into()),
+    }
+}
+
+/// The descriptors of one side of a knn request.
+enum Side<'a> {
+    Rows(&'a [[u8; 128]]),
+    Owned(Vec<[u8; 128]>),
+}
+
+impl Side<'_> {
+    fn rows(&self) -> &[[u8; 128]] {
+        match self {
+            Side::Rows(r) => r,
+            Side::Owned(v) => v,
+        }
+    }
+}
+
+/// Answers `{"op": "knn", "q", "qid", "nq", "t", "tid", "nt", "k"}` with
+/// siftlab's `knnMatch` (per query the min(k, nt) nearest, in OpenCV's order
+/// and ties), compactly: `{"kk": K, "t": B64, "d": B64}`, the K train
+/// indices (int32) and distances (float32) of each query in turn, little
+/// endian (the list form `{"matches": [[[t, d], …], …]}` when no query has a
+/// match). A request that cannot be
+/// answered gets `{"error": MSG}` (k < 1 as OpenCV words it).
+pub fn knn_answer(request: &str, pairs: &[Pair]) -> String {
+    match knn_request(request, pairs) {
+        Ok((q, t, k)) => {
+            let all = knn_match(q.rows(), t.rows(), k);
+            let kk = all.first().map_or(0, Vec::len);
+            if kk == 0 || all.iter().any(|r| r.len() != kk) {
+                return knn_answer_lists(&all);
+            }
+            let mut ti = Vec::with_capacity(4 * kk * all.len());
+            let mut di = Vec::with_capacity(4 * kk * all.len());
+            for m in all.iter().flatten() {
+                ti.extend_from_slice(&(m.train_idx as i32).to_le_bytes());
+                di.extend_from_slice(&m.distance.to_le_bytes());
+            }
+            format!("{{\"kk\": {kk}, \"t\": \"{}\", \"d\": \"{}\"}}", base64(&ti), base64(&di))
+        }
+        Err(e) => {
+            let mut s = String::from("{\"error\": ");
+            push_str(&mut s, &e);
+            s.push('}');
+            s
+        }
+    }
+}
+
+/// `{"matches": [[[trainIdx, distance], …], …]}`.
+fn knn_answer_lists(all: &[Vec<crate::matching::DMatch>]) -> String {
+    let n: usize = all.iter().map(Vec::len).sum();
+    let mut s = String::with_capacity(16 + 3 * all.len() + 24 * n);
+    s.push_str("{\"matches\": [");
+    for (i, row) in all.iter().enumerate() {
+        if i > 0 {
+            s.push_str(", ");
+        }
+        s.push('[');
+        for (j, m) in row.iter().enumerate() {
+            if j > 0 {
+                s.push_str(", ");
+            }
+            // Rust's shortest round-trip text of the widened f32: the same
+            // f64 as Python's repr.
+            let _ = write!(s, "[{}, {:?}]", m.train_idx, m.distance as f64);
+        }
+        s.push(']');
+    }
+    s.push_str("]}");
+    s
+}
+
+fn knn_request<'a>(request: &str, pairs: &'a [Pair]) -> Result<(Side<'a>, Side<'a>, usize), String> {
+    let v = parse(request).map_err(|e| format!("knn request is not JSON: {e}"))?;
+    if v.get("op").and_then(Json::as_str) != Some("knn") {
+        return Err("not a knn request (\"op\" is not \"knn\")".into());
+    }
+    let k = v.get("k").and_then(Json::as_i64).ok_or("knn request without an integer \"k\"")?;
+    if k < 1 {
+        return Err("OpenCV(4.8.0) /io/opencv/modules/features2d/src/matchers.cpp:655: error: (-215:Assertion failed) knn > 0 in function 'knnMatch'".into());
+    }
+    let q = side(&v, "q", "qid", "nq", pairs)?;
+    let t = side(&v, "t", "tid", "nt", pairs)?;
+    Ok((q, t, usize::try_from(k).unwrap_or(usize::MAX)))
+}
+
+fn side<'a>(v: &Json, data: &str, id: &str, count: &str, pairs: &'a [Pair]) -> Result<Side<'a>, String> {
+    if let Some(r) = v.get(id).and_then(Json::as_str) {
+        let (pair, which) = r.split_once('/').ok_or_else(|| format!("\"{id}\" {r:?} is not \"K/1\" or \"K/2\""))?;
+        let pair: u32 = pair.parse().map_err(|_| format!("\"{id}\" {r:?} does not start with a pair id"))?;
+        let p = pairs.iter().find(|p| p.id == pair).ok_or_else(|| format!("\"{id}\": no pair {pair} was sent"))?;
+        return match which {
+            "1" => Ok(Side::Rows(&p.prev.descriptors)),
+            "2" => Ok(Side::Rows(&p.cur.descriptors)),
+            _ => Err(format!("\"{id}\" {r:?} is not \"K/1\" or \"K/2\"")),
+        };
+    }
+    let b64 =
+        v.get(data).and_then(Json::as_str).ok_or_else(|| format!("knn request without \"{data}\" or \"{id}\""))?;
+    let bytes = unbase64(b64).ok_or_else(|| format!("\"{data}\" is not base64"))?;
+    let n = v.get(count).and_then(Json::as_i64).ok_or_else(|| format!("knn request without an integer \"{count}\""))?;
+    if bytes.len() % 128 != 0 || i64::try_from(bytes.len() / 128) != Ok(n) {
+        return Err(format!("\"{data}\" holds {} bytes, not {n} rows of 128", bytes.len()));
+    }
+    let (rows, _) = bytes.as_chunks::<128>();
+    Ok(Side::Owned(rows.to_vec()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::matching::{DMatch, MatchInfo, Strategy};
+
+    fn features(n: usize, seed: u8) -> Features {
+        let kp = KeyPoint { x: 523.97, y: 181.2, size: 2.5, angle: 359.9, response: 0.0123, octave: 0x10203 };
+        Features {
+            keypoints: vec![kp; n],
+            descriptors: (0..n)
+                .map(|i| std::array::from_fn(|j| ((i * 7 + j * 13 + seed as usize) % 256) as u8))
+                .collect(),
+        }
+    }
+
+    #[test]
+    fn messages_are_the_documented_json() {
+        let load = parse(&load_message("class VisionTasks:\n\tpass\r\n")).unwrap();
+        assert_eq!(load.get("source").unwrap().as_str(), Some("class VisionTasks:\n\tpass\r\n"));
+        let (a, b) = (features(3, 0), features(2, 5));
+        let p = parse(&pair_message(12, &a, &b)).unwrap();
+        assert_eq!(p.get("id"), Some(&Json::Int(12)));
+        let kp = &p.get("kp1").unwrap().as_arr().unwrap()[0];
+        assert_eq!(
+            kp.py_repr(),
+            "[523.969970703125, 181.1999969482422, 2.5, 359.8999938964844, 0.012299999594688416, 66051]"
+        );
+        assert_eq!(unbase64(p.get("des2").unwrap().as_str().unwrap()).unwrap(), b.descriptors.as_flattened());
+        let none = Expected::Matches(Vec::new());
+        let c = Case::Nn { frame: 12, threshold: None };
+        assert_eq!(
+            call_message(&c, 12, &none),
+            r#"{"op": "call", "fn": "nn", "pair": 12, "threshold": null, "compact": true}"#
+        );
+        let c = Case::Dt { frame: 3, threshold: 500.0 };
+        assert_eq!(
+            call_message(&c, 3, &none),
+            r#"{"op": "call", "fn": "dt", "pair": 3, "threshold": 500.0, "compact": true}"#
+        );
+        let c = Case::Info { frame: 3, strategy: Strategy::Nn(None), feature: 1 };
+        let e = Expected::Info {
+            matches: vec![DMatch { query_idx: 1, train_idx: 928, distance: 61.4 }],
+            info: MatchInfo { query: (523, 181), points: vec![(517, 183)], distances: vec![61.4] },
+        };
+        assert_eq!(
+            call_message(&c, 3, &e),
+            r#"{"op": "call", "fn": "matching_info", "pair": 3, "matches": [[1, 928, 61.400001525878906]], "expected": [[523, 181], [[517, 183]], [61.400001525878906]]}"#
+        );
+    }
+
+    #[test]
+    fn replies_and_requests_are_read() {
+        assert_eq!(
+            parse_reply(r#"{"ok": true}"#).unwrap(),
+            Reply::Ok { value: Json::Bool(true), repr: None, equal: None }
+        );
+        assert_eq!(
+            parse_reply(r#"{"error": "line 3: invalid syntax", "kind": "syntax"}"#).unwrap(),
+            Reply::Error { message: "line 3: invalid syntax".into(), kind: ErrorKind::Syntax }
+        );
+        assert_eq!(
+            parse_reply(r#"{"error": "no pair 3", "kind": "protocol"}"#).unwrap(),
+            Reply::Error { message: "no pair 3".into(), kind: ErrorKind::Protocol }
+        );
+        let r = parse_reply(r#"{"ok":[[1,2],[],[]],"repr":"((1, 2), [], [])","equal":false,"output":"hi\n"}"#).unwrap();
+        assert!(matches!(r, Reply::Ok { repr: Some(ref s), equal: Some(false), .. } if s == "((1, 2), [], [])"));
+        assert_eq!(parse_line(r#"{"op":"knn","qid":"1/1","tid":"1/2","k":2}"#).unwrap(), HarnessLine::Knn);
+        assert!(parse_reply("Traceback (most recent call last):").is_err());
+        assert!(parse_reply(r#"{"op": "knn"}"#).is_err());
+        assert!(parse_reply(r#"{"x": 1}"#).is_err());
+    }
+
+    /// A knn answer as (trainIdx, distance) rows, from either form.
+    fn rows_of(answer: &str) -> Vec<Vec<(usize, f32)>> {
+        let v = parse(answer).unwrap();
+        if let Some(rows) = v.get("matches") {
+            return rows
+                .as_arr()
+                .unwrap()
+                .iter()
+                .map(|r| {
+                    r.as_arr()
+                        .unwrap()
+                        .iter()
+                        .map(|m| {
+                            let m = m.as_arr().unwrap();
+                            (m[0].as_i64().unwrap() as usize, m[1].as_f64().unwrap() as f32)
+                        })
+                        .collect()
+                })
+                .collect();
+        }
+        let kk = v.get("kk").unwrap().as_i64().unwrap() as usize;
+        let t = unbase64(v.get("t").unwrap().as_str().unwrap()).unwrap();
+        let d = unbase64(v.get("d").unwrap().as_str().unwrap()).unwrap();
+        let t: Vec<usize> = t.chunks(4).map(|b| i32::from_le_bytes(b.try_into().unwrap()) as usize).collect();
+        let d: Vec<f32> = d.chunks(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
+        t.chunks(kk).zip(d.chunks(kk)).map(|(t, d)| t.iter().copied().zip(d.iter().copied()).collect()).collect()
+    }
+
+    #[test]
+    fn knn_is_answered_by_reference_and_by_value() {
+        let pairs = [Pair { id: 7, prev: features(40, 1), cur: features(30, 9) }];
+        let by_ref = knn_answer(
+            r#"{"op": "knn", "q": null, "qid": "7/1", "nq": 40, "t": null, "tid": "7/2", "nt": 30, "k": 3}"#,
+            &pairs,
+        );
+        let q = base64(pairs[0].prev.descriptors.as_flattened());
+        let t = base64(pairs[0].cur.descriptors.as_flattened());
+        let by_value = knn_answer(
+            &format!(
+                r#"{{"op": "knn", "q": "{q}", "qid": null, "nq": 40, "t": "{t}", "tid": null, "nt": 30, "k": 3}}"#
+            ),
+            &pairs,
+        );
+        assert_eq!(by_ref, by_value);
+        assert!(by_ref.starts_with(r#"{"kk": 3, "t": ""#), "{by_ref}");
+        let want = knn_match(&pairs[0].prev.descriptors, &pairs[0].cur.descriptors, 3);
+        let want: Vec<Vec<(usize, f32)>> =
+            want.iter().map(|r| r.iter().map(|m| (m.train_idx, m.distance)).collect()).collect();
+        assert_eq!(rows_of(&by_ref), want);
+        // The list form reads the same.
+        let lists = knn_answer_lists(&knn_match(&pairs[0].prev.descriptors, &pairs[0].cur.descriptors, 3));
+        assert_eq!(rows_of(&lists), want);
+        // Mixed: the query by value against a pair's train side; k above nt.
+        let mixed = knn_answer(
+            &format!(
+                r#"{{"op": "knn", "q": "{q}", "qid": null, "nq": 40, "t": null, "tid": "7/2", "nt": 30, "k": 99}}"#
+            ),
+            &pairs,
+        );
+        assert!(rows_of(&mixed).iter().all(|r| r.len() == 30));
+        let empty = knn_answer(r#"{"op": "knn", "q": "", "nq": 0, "tid": "7/2", "k": 2}"#, &pairs);
+        assert_eq!(empty, r#"{"matches": []}"#);
+        let no_train = knn_answer(r#"{"op": "knn", "qid": "7/1", "t": "", "nt": 0, "k": 2}"#, &pairs);
+        assert!(no_train.starts_with(r#"{"matches": [[], []"#), "{no_train}");
+        for (bad, says) in [
+            (r#"{"op": "knn", "qid": "7/1", "tid": "7/2", "k": 0}"#, "knn > 0"),
+            (r#"{"op": "knn", "qid": "8/1", "tid": "7/2", "k": 1}"#, "no pair 8"),
+            (r#"{"op": "knn", "qid": "7/3", "tid": "7/2", "k": 1}"#, "K/1"),
+            (r#"{"op": "knn", "q": "AAAA", "nq": 1, "tid": "7/2", "k": 1}"#, "not 1 rows of 128"),
+            (r#"{"op": "knn", "tid": "7/2", "k": 1}"#, "without"),
+            ("nonsense", "not JSON"),
+        ] {
+            let a = knn_answer(bad, &pairs);
+            assert!(a.starts_with("{\"error\": ") && a.contains(says), "{bad}: {a}");
+        }
+    }
+}
