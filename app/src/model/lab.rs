@@ -135,6 +135,9 @@ pub struct Lab {
     /// Exercise seed (None = exercises not started) and question number.
     pub ex_seed: RwSignal<Option<u64>>,
     pub ex_q: RwSignal<u32>,
+    /// "Mark my code": the cases' seed and how many per task (in the link).
+    pub mark_seed: RwSignal<u64>,
+    pub mark_n: RwSignal<u32>,
     pub analysis: Memo<Option<Result<Analysis, String>>>,
     /// The "see inside" views' state.
     pub inside: crate::model::see_inside::Inside,
@@ -175,6 +178,8 @@ impl Lab {
             lanes: RwSignal::new(8),
             ex_seed: RwSignal::new(None),
             ex_q: RwSignal::new(1),
+            mark_seed: RwSignal::new(0),
+            mark_n: RwSignal::new(crate::model::mark::DEFAULT_CASES),
             analysis,
             inside: crate::model::see_inside::Inside::new(),
         }

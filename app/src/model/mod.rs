@@ -8,6 +8,7 @@ pub mod frame;
 pub mod frameset;
 pub mod lab;
 pub mod lab_manual;
+pub mod mark;
 pub mod odometry;
 pub mod parse;
 pub mod plot;

@@ -32,6 +32,9 @@ pub struct UrlState {
     pub see: Option<String>,
     pub px: Option<String>,
     pub kp: Option<usize>,
+    /// "Mark my code": the cases' seed and how many per task.
+    pub mark: Option<u64>,
+    pub mn: Option<u32>,
 }
 
 impl UrlState {
@@ -54,6 +57,8 @@ impl UrlState {
                 "see" => st.see = Some(v.to_string()),
                 "px" => st.px = Some(v.to_string()),
                 "kp" => st.kp = v.parse().ok(),
+                "mark" => st.mark = v.parse().ok(),
+                "mn" => st.mn = v.parse().ok(),
                 _ => {}
             }
         }
@@ -75,6 +80,8 @@ impl UrlState {
             self.see.clone().map(|v| ("see", v)),
             self.px.clone().map(|v| ("px", v)),
             num("kp", self.kp.map(|k| k as u64)),
+            num("mark", self.mark),
+            num("mn", self.mn.map(u64::from)),
         ]
         .into_iter()
         .flatten()
@@ -127,12 +134,14 @@ mod tests {
             see: Some("matches".into()),
             px: Some("1.5".into()),
             kp: Some(12),
+            mark: Some(7),
+            mn: Some(5),
         };
         let pairs = st.to_pairs();
         let keys: Vec<&str> = pairs.iter().map(|(k, _)| *k).collect();
-        assert_eq!(keys, ["src", "frame", "feature", "algo", "t", "ex", "q", "lanes", "see", "px", "kp"]);
+        assert_eq!(keys, ["src", "frame", "feature", "algo", "t", "ex", "q", "lanes", "see", "px", "kp", "mark", "mn"]);
         let values: Vec<&str> = pairs.iter().map(|(_, v)| v.as_str()).collect();
-        assert_eq!(values, ["demo", "1", "7", "nndr", "0.8", "42", "3", "16", "matches", "1.5", "12"]);
+        assert_eq!(values, ["demo", "1", "7", "nndr", "0.8", "42", "3", "16", "matches", "1.5", "12", "7", "5"]);
         assert_eq!(UrlState::from_pairs(pairs), st);
     }
 

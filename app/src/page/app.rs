@@ -6,6 +6,7 @@ use super::controls::Controls;
 use super::explain::Explanation;
 use super::frames::FramesView;
 use super::load::{Loader, Status};
+use super::mark::MarkMyCode;
 use super::result::ResultPanel;
 use super::see_inside::SeeInside;
 use super::trajectory::TrajectoryView;
@@ -43,6 +44,7 @@ pub fn Explorer(lab: Lab) -> impl IntoView {
             </div>
             <SeeInside/>
             <TrajectoryView/>
+            <MarkMyCode/>
         </main>
         <footer>
             <p>
@@ -94,6 +96,12 @@ pub fn apply_url(lab: Lab, st: &UrlState) {
         lab.inside.px.set(px.clone());
     }
     lab.inside.kp.set(st.kp);
+    if let Some(seed) = st.mark {
+        lab.mark_seed.set(seed);
+    }
+    if let Some(n) = st.mn.filter(|&n| (1..=crate::model::mark::MAX_CASES).contains(&n)) {
+        lab.mark_n.set(n);
+    }
     if let Some(seed) = st.ex {
         lab.ex_seed.set(Some(seed));
         lab.ex_q.set(st.q.unwrap_or(1).max(1));
@@ -130,6 +138,8 @@ pub fn url_state(lab: Lab) -> UrlState {
         see: lab.inside.view.get().map(|v| v.name().to_string()),
         px: Some(lab.inside.px.get()).filter(|p| p.trim() != "2"),
         kp: lab.inside.kp.get(),
+        mark: Some(lab.mark_seed.get()).filter(|&s| s != 0),
+        mn: Some(lab.mark_n.get()).filter(|&n| n != crate::model::mark::DEFAULT_CASES),
     }
 }
 

@@ -11,6 +11,7 @@ mod frames;
 mod legend;
 mod load;
 mod manual;
+mod mark;
 mod result;
 mod see_inside;
 mod trajectory;

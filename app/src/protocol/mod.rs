@@ -8,6 +8,7 @@
 
 pub mod codec;
 pub mod inside;
+pub mod mark;
 pub mod odometry;
 pub mod sift;
 

@@ -296,6 +296,18 @@ pub fn reanalyse(lab: Lab) {
     }
 }
 
+/// Frame `id`'s file of the current source (the demo or a MyKITTI folder).
+pub async fn frame_bytes(source: &Source, id: u32) -> Result<Vec<u8>, String> {
+    match source {
+        Source::Demo(_) => fetch_bytes(&format!("demo/{}", frame_path(id))).await,
+        Source::Folder(_) => {
+            let file = FOLDER.with(|f| f.borrow().get(&id).cloned()).ok_or("open the folder again")?;
+            read_file(&file).await.map_err(|e| format!("{}: {e}", frame_path(id)))
+        }
+        Source::Files => Err("marking needs the demo or a MyKITTI folder (frame pairs by FRAME_ID)".into()),
+    }
+}
+
 /// Frames 0..n and the ground-truth poses of the current source, for the
 /// odometry view (the lab's `view_trajectory FRAME_ID` runs frames 0 … FRAME_ID,
 /// so n = FRAME_ID + 1).

@@ -5,6 +5,7 @@
 
 pub mod inside;
 pub mod loading;
+pub mod mark;
 pub mod odometry;
 pub mod sift_pool;
 pub mod worker_handle;

@@ -4,8 +4,12 @@
 //! [`start`] decodes each request and hands it to its kind's handler.
 
 pub mod inside;
+pub mod mark;
 pub mod odometry;
 pub mod sift;
+
+/// The name the page gives the "Mark my code" worker (`www/mark-worker.js`).
+pub const MARK_WORKER_NAME: &str = "siftlab-mark";
 
 use crate::protocol::{ready_js, Request};
 use wasm_bindgen::prelude::*;
@@ -18,6 +22,11 @@ pub fn start() {
         web_sys::console::error_1(&format!("siftlab worker panicked: {info}").into());
     }));
     let scope: web_sys::DedicatedWorkerGlobalScope = js_sys::global().unchecked_into();
+    // The "Mark my code" worker loads this build only for its matcher
+    // ([`mark`]'s exports): its own script handles the messages.
+    if scope.name() == MARK_WORKER_NAME {
+        return;
+    }
     let post_scope = scope.clone();
     let onmessage = Closure::<dyn FnMut(web_sys::MessageEvent)>::new(move |ev: web_sys::MessageEvent| {
         let post = |m: JsValue| {
