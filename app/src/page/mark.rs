@@ -24,14 +24,19 @@ fn Report(o: Outcome) -> impl IntoView {
         .tasks
         .iter()
         .map(|t| {
+            // The slowest call against the 10 s limit: how close a correct but slow
+            // solution comes to losing its marks.
+            let slowest =
+                m.results.iter().filter(|r| r.case.task() == t.task).map(|r| r.seconds).fold(0.0f64, f64::max);
             view! {
                 <tr data-testid="mark-row" data-task=t.task.name() data-marks=format!("{:.2}", t.marks)
-                    data-correct=t.correct data-errors=t.errors data-calls=t.calls>
+                    data-correct=t.correct data-errors=t.errors data-calls=t.calls data-slowest=format!("{slowest:.3}")>
                     <td><code>{t.task.name()}</code></td>
                     <td>{t.calls}</td>
                     <td>{t.correct}</td>
                     <td>{t.errors}</td>
                     <td>{format!("{:.2} / 5", t.marks)}</td>
+                    <td>{format!("{slowest:.1} s")}</td>
                 </tr>
             }
         })
@@ -66,7 +71,7 @@ fn Report(o: Outcome) -> impl IntoView {
             </p>
             <div class="table-scroll" tabindex="0" role="region" aria-label="Marks per task">
                 <table class="mark-table" data-testid="mark-table">
-                    <thead><tr><th>"task"</th><th>"calls"</th><th>"correct"</th><th>"errors"</th><th>"marks"</th></tr></thead>
+                    <thead><tr><th>"task"</th><th>"calls"</th><th>"correct"</th><th>"errors"</th><th>"marks"</th><th>"slowest call"</th></tr></thead>
                     <tbody>{rows}</tbody>
                 </table>
             </div>
