@@ -756,6 +756,9 @@ async function markFile(variant, n, seed, { file } = {}) {
 async function pageMarks() {
   const rows = await page.evalAll(tid('mark-row'), (tr) => [tr.dataset.task, tr.dataset.marks, tr.dataset.correct, tr.dataset.errors]);
   const total = await page.getAttribute(tid('mark-total'), 'data-total');
+  // Each task's slowest call (against the 10 s limit), for the figures.
+  metrics.markSlowest = [...(metrics.markSlowest || []), Object.fromEntries(
+    await page.evalAll(tid('mark-row'), (tr) => [tr.dataset.task, Number(tr.dataset.slowest)]))];
   const diagnoses = await page.evalAll(tid('mark-failure'), (li) => `${li.dataset.task}:${li.dataset.diagnosis}`);
   return { rows, total, diagnoses };
 }
