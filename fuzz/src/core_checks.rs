@@ -470,7 +470,12 @@ pub fn poses(data: &[u8]) {
     };
     // A dataset as the app assembles one from a picked folder.
     let frame_count = (mode >> 4) as usize;
-    let ds = Dataset::from_parts("picked".into(), frame_count, poses.clone());
+    let ds = Dataset::from_parts("picked".into(), frame_count, Some(poses.clone()));
+    // The same bytes as a calib.txt: a camera that validates, or a message.
+    match dataset::parse_calib(&text, "calib.txt") {
+        Ok(cam) => assert!(cam.validate().is_ok() && text.contains("P0:")),
+        Err(e) => check_message(&e),
+    }
     for n in 0..=18 {
         match ds.check_frames(n) {
             Ok(()) => assert!(n <= frame_count && n <= poses.len()),
@@ -486,18 +491,24 @@ pub fn poses(data: &[u8]) {
     }
 }
 
-/// A dataset folder laid out from fuzz bits (frames folder, poses file,
-/// frames that are images or not), opened and read.
+/// A dataset folder laid out from fuzz bits (the lab's layout or KITTI's,
+/// frames folder, poses file, calib.txt, frames that are images or not),
+/// opened and read.
 fn open_layout(mode: u8, rest: &[u8]) {
     let bits = rest.first().copied().unwrap_or(0) ^ mode;
     let dir = std::env::temp_dir().join(format!("siftlab-fuzz-ds-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
+    let layout = if bits & 8 != 0 { dataset::Layout::Kitti } else { dataset::Layout::Lab };
+    let seq = dataset::SequenceLayout::new(layout, "00").unwrap();
     if bits & 1 != 0 {
-        std::fs::create_dir_all(dir.join(dataset::FRAME_DIR)).unwrap();
+        std::fs::create_dir_all(dir.join(seq.frame_dir())).unwrap();
         for i in 0..(bits >> 5) as usize {
             let bytes: &[u8] = if bits & 2 != 0 { TINY_PNG } else { &rest[..rest.len().min(64)] };
-            std::fs::write(dir.join(dataset::FRAME_DIR).join(dataset::frame_name(i)), bytes).unwrap();
+            std::fs::write(dir.join(seq.frame_path(i)), bytes).unwrap();
+        }
+        if bits & 16 != 0 {
+            std::fs::write(dir.join(seq.calib_file()), rest).unwrap();
         }
     }
     if bits & 4 != 0 {
@@ -506,7 +517,7 @@ fn open_layout(mode: u8, rest: &[u8]) {
     }
     match Dataset::open(&dir) {
         Ok(ds) => {
-            assert!(ds.frame_count() >= 1);
+            assert_eq!(ds.sequence(), &seq);
             for i in 0..ds.frame_count() {
                 if let Err(e) = ds.load_frame(i) {
                     check_message(&e);

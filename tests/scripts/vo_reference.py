@@ -5,11 +5,14 @@
     python3 vo_reference.py [--dataset DIR] [--frames N] [--out poses.txt] [--trace FILE] [--json]
                             [--opencv-lanes {8,16}] [--no-ipp]
     python3 vo_reference.py --fixtures      # tests/fixtures/vo_lk/: frames 0-150, IPP off, 8 lanes
+    python3 vo_reference.py --fixtures --camera-fixture   # tests/fixtures/vo_kitti03/: the same
+        # frames as sequence 03 in KITTI's layout, with its calib.txt (fx = fy = 721.5377)
 
 Per frame: SIFT (nfeatures=1500) keypoints of frame 0; LK tracking
 (21x21, 3 levels, 30 iterations / 0.01); findEssentialMat(cur, ref, RANSAC, 0.999, 1 px);
 recoverPose; t += scale * R.ti and R = Ri.R when the ground-truth scale > 0.1;
-re-detection when fewer than 1500 points were tracked. KITTI 00 intrinsics.
+re-detection when fewer than 1500 points were tracked. The camera is the sequence's calib.txt P0
+(the lab's KITTI 00 intrinsics when the lab's layout has none); -s picks the sequence.
 
 Prints the final position, the trajectory error (ATE RMSE, no alignment, GT scale) and the
 frames per second of the whole loop (image reading included, as the lab runs it). --out writes
@@ -83,6 +86,8 @@ LK_PARAMS = dict(winSize=(21, 21), criteria=(cv2.TERM_CRITERIA_EPS | cv2.TERM_CR
 
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 FIXTURE_DIR = os.path.join(REPO, "tests", "fixtures", "vo_lk")
+# The same loop on the bundled frames as KITTI-layout sequence 03, with 03's camera.
+CAMERA_FIXTURE_DIR = os.path.join(REPO, "tests", "fixtures", "vo_kitti03")
 # The committed references run frames 0..FIXTURE_FRAMES-1 (the bundled 0-150).
 FIXTURE_FRAMES = 151
 GOLDEN = os.path.join(REPO, "tests", "fixtures", "golden-avx2")
@@ -163,30 +168,59 @@ def default_dataset() -> str:
     return os.path.join(REPO, "www", "demo", "MyKITTI")
 
 
-def frame_path(dataset: str, i: int) -> str:
-    return os.path.join(dataset, "gray", "00", "image_0", "%06d.png" % i)
+def sequence_dir(dataset: str, seq: str = "00") -> str:
+    """The sequence's folder: gray/NN (the lab's MyKITTI layout, preferred when both exist, as
+    siftlab does) or sequences/NN (KITTI's odometry layout)."""
+    lab = os.path.join(dataset, "gray", seq)
+    if os.path.isdir(os.path.join(lab, "image_0")):
+        return lab
+    return os.path.join(dataset, "sequences", seq)
 
 
-def read_poses(dataset: str):
-    with open(os.path.join(dataset, "poses", "00.txt")) as f:
+def frame_path(dataset: str, i: int, seq: str = "00") -> str:
+    return os.path.join(sequence_dir(dataset, seq), "image_0", "%06d.png" % i)
+
+
+def read_poses(dataset: str, seq: str = "00"):
+    with open(os.path.join(dataset, "poses", seq + ".txt")) as f:
         rows = [[float(v) for v in line.split()] for line in f if line.strip()]
     return rows
+
+
+def read_camera(dataset: str, seq: str = "00"):
+    """(focal, pp) from the sequence's calib.txt P0 line (fx = P0[0], cx = P0[2], fy = P0[5],
+    cy = P0[6]); the lab's KITTI 00 camera when the lab's layout has no calib.txt."""
+    path = os.path.join(sequence_dir(dataset, seq), "calib.txt")
+    if not os.path.isfile(path):
+        if os.path.basename(os.path.dirname(sequence_dir(dataset, seq))) == "sequences":
+            raise SystemExit("%s is missing: KITTI's layout needs the sequence's camera" % path)
+        return FOCAL, PP
+    with open(path) as f:
+        for line in f:
+            if line.startswith("P0:"):
+                p = [float(v) for v in line.split()[1:]]
+                if p[0] != p[5]:
+                    raise SystemExit("%s: fx != fy; the lab's call passes one focal length" % path)
+                return p[0], (p[2], p[6])
+    raise SystemExit("%s has no P0 line" % path)
 
 
 def gt_position(row):
     return (row[3], row[7], row[11])
 
 
-def count_frames(dataset: str) -> int:
+def count_frames(dataset: str, seq: str = "00") -> int:
     n = 0
-    while os.path.isfile(frame_path(dataset, n)):
+    while os.path.isfile(frame_path(dataset, n, seq)):
         n += 1
     return n
 
 
-def run(dataset: str, frames: int):
-    """The lab's loop. Returns (positions, rotations, poses, trace): the trace as `trace_row`s."""
-    poses = read_poses(dataset)
+def run(dataset: str, frames: int, seq: str = "00"):
+    """The lab's loop on sequence `seq` with its camera (`read_camera`). Returns (positions,
+    rotations, poses, trace): the trace as `trace_row`s."""
+    poses = read_poses(dataset, seq)
+    focal, pp = read_camera(dataset, seq)
     sift = cv2.SIFT_create(nfeatures=NFEATURES)
 
     def detect(img):
@@ -197,9 +231,9 @@ def run(dataset: str, frames: int):
     t = np.zeros((3, 1))
     last = ref = None
     for i in range(frames):
-        img = cv2.imread(frame_path(dataset, i), 0)
+        img = cv2.imread(frame_path(dataset, i, seq), 0)
         if img is None:
-            raise SystemExit("cannot read frame %d (%s)" % (i, frame_path(dataset, i)))
+            raise SystemExit("cannot read frame %d (%s)" % (i, frame_path(dataset, i, seq)))
         if i == 0:
             ref = detect(img)
             trace.append(trace_row(0, redetected=True))
@@ -208,9 +242,9 @@ def run(dataset: str, frames: int):
             cur, st, _err = cv2.calcOpticalFlowPyrLK(last, img, ref, None, **LK_PARAMS)
             st = st.reshape(-1)
             ref, cur = ref[st == 1], cur[st == 1]
-            E, mask = cv2.findEssentialMat(cur, ref, focal=FOCAL, pp=PP, method=cv2.RANSAC,
+            E, mask = cv2.findEssentialMat(cur, ref, focal=focal, pp=pp, method=cv2.RANSAC,
                                            prob=0.999, threshold=1.0)
-            n_pose, Ri, ti, _mask = cv2.recoverPose(E, cur, ref, focal=FOCAL, pp=PP)
+            n_pose, Ri, ti, _mask = cv2.recoverPose(E, cur, ref, focal=focal, pp=pp)
             redetected = False
             if i == 1:
                 R, t = Ri, ti
@@ -228,6 +262,23 @@ def run(dataset: str, frames: int):
         positions.append(tuple(float(v) for v in t.ravel()) if i >= 2 else (0.0, 0.0, 0.0))
         rotations.append(np.array(R, dtype=np.float64))
     return positions, rotations, poses, trace
+
+
+def kitti_layout_copy(dataset: str, seq: str, calib: str) -> str:
+    """A temporary dataset in KITTI's layout: sequences/SEQ/image_0/ links to the lab-layout
+    frames of `dataset`, sequences/SEQ/calib.txt is a copy of `calib`, poses/SEQ.txt of the
+    dataset's poses/00.txt (what tests/ builds for siftlab the same way)."""
+    import shutil
+    import tempfile
+    root = tempfile.mkdtemp(prefix="siftlab-kitti-")
+    frames = os.path.join(root, "sequences", seq, "image_0")
+    os.makedirs(frames)
+    os.makedirs(os.path.join(root, "poses"))
+    for i in range(count_frames(dataset)):
+        os.symlink(os.path.abspath(frame_path(dataset, i)), os.path.join(frames, "%06d.png" % i))
+    shutil.copy(calib, os.path.join(root, "sequences", seq, "calib.txt"))
+    shutil.copy(os.path.join(dataset, "poses", "00.txt"), os.path.join(root, "poses", seq + ".txt"))
+    return root
 
 
 def ate_rmse(est, gt):
@@ -254,25 +305,38 @@ def main():
     ap.add_argument("--no-ipp", action="store_true", help="OPENCV_IPP=disabled (the build siftlab reproduces)")
     ap.add_argument("--fixtures", action="store_true",
                     help="write tests/fixtures/vo_lk/ (frames 0-150, IPP off, 8 lanes, checked against the goldens)")
+    ap.add_argument("-s", "--sequence", default="00", help="the sequence (gray/NN or sequences/NN; default 00)")
+    ap.add_argument("--camera-fixture", action="store_true",
+                    help="with --fixtures: write tests/fixtures/vo_kitti03/ instead, the bundled frames as sequence 03 "
+                         "in KITTI's layout with that folder's calib.txt (sequence 03's camera)")
     args = ap.parse_args()
+    args.sequence = "%02d" % int(args.sequence)
     check_opencv(require_goldens=args.fixtures)
     if os.environ.get("OPENCV_IPP") == "disabled":
         cv2.setNumThreads(1)  # as the goldens were written (threads never change the output)
     dataset = args.dataset or default_dataset()
+    fixture_dir = FIXTURE_DIR
+    if args.camera_fixture and not args.fixtures:
+        raise SystemExit("--camera-fixture goes with --fixtures")
     if args.fixtures:
         if args.dataset or args.out or args.trace:
             raise SystemExit("--fixtures writes the bundled dataset's references; drop --dataset/--out/--trace")
-        os.makedirs(FIXTURE_DIR, exist_ok=True)
+        if args.camera_fixture:
+            fixture_dir = CAMERA_FIXTURE_DIR
+            dataset = kitti_layout_copy(dataset, "03", os.path.join(fixture_dir, "calib.txt"))
+            args.sequence = "03"
+        os.makedirs(fixture_dir, exist_ok=True)
         args.frames = args.frames or FIXTURE_FRAMES
-        args.out = os.path.join(FIXTURE_DIR, "poses.txt")
-        args.trace = os.path.join(FIXTURE_DIR, "trace.jsonl")
-    available = count_frames(dataset)
+        args.out = os.path.join(fixture_dir, "poses.txt")
+        args.trace = os.path.join(fixture_dir, "trace.jsonl")
+    seq = args.sequence
+    available = count_frames(dataset, seq)
     frames = args.frames if args.frames is not None else available
     if frames < 2 or frames > available:
         raise SystemExit("need 2..%d frames, got %d (dataset %s)" % (available, frames, dataset))
 
     start = time.perf_counter()
-    positions, rotations, poses, trace = run(dataset, frames)
+    positions, rotations, poses, trace = run(dataset, frames, seq)
     elapsed = time.perf_counter() - start
     gt = [gt_position(poses[i]) for i in range(frames)]
     ate = ate_rmse(positions, gt)
@@ -281,10 +345,18 @@ def main():
     if args.trace:
         write_trace(args.trace, trace)
     if args.fixtures:
-        write_json(os.path.join(FIXTURE_DIR, "meta.json"), fixture_meta(frames, {
-            "loop": "the lab's LK loop (tests/scripts/vo_reference.py --fixtures)",
+        extra = {
+            "loop": "the lab's LK loop (tests/scripts/vo_reference.py --fixtures%s)"
+                    % (" --camera-fixture" if args.camera_fixture else ""),
             "files": {"poses.txt": "KITTI pose lines, frames 0..%d" % (frames - 1),
-                      "trace.jsonl": "per-frame counts, vo::StepResult names"}}))
+                      "trace.jsonl": "per-frame counts, vo::StepResult names"}}
+        if args.camera_fixture:
+            focal, pp = read_camera(dataset, seq)
+            extra["layout"] = ("KITTI's: sequences/03/image_0 = the bundled frames, sequences/03/calib.txt = "
+                               "calib.txt here, poses/03.txt = the bundled poses/00.txt")
+            extra["camera"] = {"focal": focal, "pp": list(pp)}
+            extra["files"]["calib.txt"] = "the P0 line of KITTI sequence 03 (input, not written)"
+        write_json(os.path.join(fixture_dir, "meta.json"), fixture_meta(frames, extra))
     result = {
         "dataset": dataset,
         "frames": frames,

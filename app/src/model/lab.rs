@@ -30,7 +30,8 @@ impl Which {
 pub enum Source {
     /// The bundled demo frames (`demo/gray/00/image_0/`), ids available.
     Demo(Vec<u32>),
-    /// A MyKITTI folder the user opened; ids of the frames found in it.
+    /// A folder the user opened (one sequence of it, the lab's layout or
+    /// KITTI's); ids of that sequence's frames.
     Folder(Vec<u32>),
     /// Two files picked or dropped one by one.
     Files,
@@ -117,6 +118,10 @@ pub struct Lab {
     pub prev: RwSignal<Option<Frame>>,
     pub cur: RwSignal<Option<Frame>>,
     pub source: RwSignal<Source>,
+    /// The source's KITTI sequence and camera (the demo: the lab's 00).
+    pub sequence: RwSignal<crate::model::sequence::SequenceInfo>,
+    /// A picked folder's sequences, each with its label for the choice.
+    pub folder_sequences: RwSignal<Vec<(siftlab_core::dataset::SequenceLayout, String)>>,
     /// The lab's FRAME_ID (demo/folder): frames FRAME_ID-1 and FRAME_ID.
     pub frame_id: RwSignal<u32>,
     pub algo: RwSignal<StrategyKind>,
@@ -166,6 +171,8 @@ impl Lab {
             prev,
             cur,
             source: RwSignal::new(Source::Files),
+            sequence: RwSignal::new(crate::model::sequence::SequenceInfo::demo()),
+            folder_sequences: RwSignal::new(Vec::new()),
             frame_id: RwSignal::new(1),
             algo,
             thresholds,

@@ -1,6 +1,6 @@
 //! The page's state and plain logic, no DOM: the lab's settings and analysis
 //! ([`lab`]), parsing, the URL, frame sets, exercises and self-checks, the
-//! manual's examples, Python literals, the odometry views' logic and the
+//! manual's examples, Python literals, the KITTI sequence and its camera, the odometry views' logic and the
 //! figures' geometry.
 
 pub mod exercise;
@@ -15,6 +15,7 @@ pub mod plot;
 pub mod pylit;
 pub mod see_inside;
 pub mod selfcheck;
+pub mod sequence;
 pub mod urlstate;
 pub mod vo_frame;
 pub mod whole_frame;

@@ -106,7 +106,7 @@ pub fn Loader() -> impl IntoView {
                     "Load the demo pair"
                 </button>
                 <label class="folder">
-                    "Open a MyKITTI folder… "
+                    "Open a MyKITTI or KITTI folder… "
                     <input
                         type="file"
                         multiple=true
@@ -159,6 +159,7 @@ pub fn Loader() -> impl IntoView {
                     </form>
                 </Show>
             </div>
+            <SequenceChoice/>
             <div class="slots">
                 <FrameSlot which=Which::Prev testid="frame-prev"/>
                 <FrameSlot which=Which::Cur testid="frame-cur"/>
@@ -178,6 +179,56 @@ pub fn Loader() -> impl IntoView {
                 </p>
             </Show>
         </section>
+    }
+}
+
+/// A picked folder's sequence choice (its KITTI sequences, in the lab's
+/// layout or KITTI's), and the camera the odometry and the epipolar judge
+/// use with where it comes from.
+#[component]
+fn SequenceChoice() -> impl IntoView {
+    let lab = expect_context::<Lab>();
+    let is_folder = move || matches!(lab.source.get(), Source::Folder(_));
+    let shown = move || lab.sequence.with(|s| s.seq.clone());
+    view! {
+        <Show when=move || !matches!(lab.source.get(), Source::Files)>
+            <p class="sequence muted">
+                <Show when=is_folder>
+                    <label>
+                        "Sequence "
+                        <select
+                            data-testid="folder-sequence"
+                            on:change=move |ev| {
+                                let i: usize = event_target_value(&ev).parse().unwrap_or(0);
+                                if let Some((key, _)) = lab.folder_sequences.with_untracked(|v| v.get(i).cloned()) {
+                                    let fid = Some(lab.frame_id.get_untracked());
+                                    loading::use_sequence(lab, key, fid);
+                                }
+                            }
+                        >
+                            {move || {
+                                lab.folder_sequences
+                                    .get()
+                                    .into_iter()
+                                    .enumerate()
+                                    .map(|(i, (key, label))| {
+                                        let selected = key == shown();
+                                        view! { <option value=i.to_string() selected=selected>{label}</option> }
+                                    })
+                                    .collect_view()
+                            }}
+                        </select>
+                    </label>
+                    " "
+                </Show>
+                <span data-testid="camera">{move || lab.sequence.with(|s| s.camera_line())}</span>
+            </p>
+            {move || {
+                lab.sequence
+                    .with(|s| s.warning())
+                    .map(|w| view! { <p class="warning" data-testid="camera-warning" role="note">{w}</p> })
+            }}
+        </Show>
     }
 }
 

@@ -104,7 +104,7 @@ pub fn TrajectoryView() -> impl IntoView {
         running.set(true);
         let source = lab.source.get_untracked();
         leptos::task::spawn_local(async move {
-            let (fr, poses) = match loading::vo_inputs(&source, n).await {
+            let inputs = match loading::vo_inputs(&source, n).await {
                 Ok(x) => x,
                 Err(e) => {
                     error.set(Some(e));
@@ -112,8 +112,8 @@ pub fn TrajectoryView() -> impl IntoView {
                     return;
                 }
             };
-            frames.set_value(fr.clone());
-            poses_text.set_value(poses.clone());
+            frames.set_value(inputs.frames.clone());
+            poses_text.set_value(inputs.poses.clone());
             started_ms.set_value(crate::platform::now_ms());
             let on_event = move |m| match m {
                 VoReply::Step { frame, position, truth, counts, detail, .. } => {
@@ -130,7 +130,7 @@ pub fn TrajectoryView() -> impl IntoView {
                     running.set(false);
                 }
             };
-            if let Err(e) = odometry::start(fr, poses, &[strategy], move |_, m| on_event(m)) {
+            if let Err(e) = odometry::start(inputs, &[strategy], move |_, m| on_event(m)) {
                 error.set(Some(e));
                 running.set(false);
             }

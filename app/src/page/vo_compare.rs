@@ -25,6 +25,7 @@ struct Ctx {
     error: RwSignal<Option<String>>,
     frames: StoredValue<Vec<Vec<u8>>, LocalStorage>,
     poses: StoredValue<String>,
+    camera: StoredValue<siftlab_core::vo::Camera>,
     /// Per run: its estimated poses (KITTI format) as a download, once done.
     poses_urls: RwSignal<Vec<Option<String>>>,
 }
@@ -93,7 +94,8 @@ fn start(ctx: Ctx) {
             }
         }
     };
-    if let Err(e) = odometry::start(frames, poses, &runs, on_event) {
+    let inputs = crate::services::loading::VoInputs { frames, poses, camera: ctx.camera.get_value() };
+    if let Err(e) = odometry::start(inputs, &runs, on_event) {
         ctx.error.set(Some(e));
         ctx.running.set(false);
     }
@@ -111,6 +113,7 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
         error: RwSignal::new(None),
         frames: StoredValue::new_local(Vec::new()),
         poses: StoredValue::new(String::new()),
+        camera: StoredValue::new(siftlab_core::vo::Camera::default()),
         poses_urls: RwSignal::new(Vec::new()),
     };
     let run = move |_| {
@@ -125,9 +128,10 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
         let source = source.get_untracked();
         leptos::task::spawn_local(async move {
             match loading::vo_inputs(&source, n).await {
-                Ok((frames, poses)) => {
-                    ctx.frames.set_value(frames);
-                    ctx.poses.set_value(poses);
+                Ok(inputs) => {
+                    ctx.frames.set_value(inputs.frames);
+                    ctx.poses.set_value(inputs.poses);
+                    ctx.camera.set_value(inputs.camera);
                     start(ctx);
                 }
                 Err(e) => {

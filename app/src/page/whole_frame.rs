@@ -32,7 +32,6 @@ use siftlab_core::matching::{DMatch, Strategy, StrategyKind};
 use siftlab_core::pyfmt::py_f32;
 use siftlab_core::render::palette::{self, hex, CORRECT, EPIPOLAR, PICKED, UNJUDGED, WRONG};
 use siftlab_core::render::{flow_frame, whole_frame};
-use siftlab_core::vo::Camera;
 use std::sync::Arc;
 
 /// At most this many lines are drawn (the lowest keys first): dt near 500
@@ -132,6 +131,7 @@ pub fn WholeFrameView() -> impl IntoView {
             Err(e) => return error.set(Some(e)),
         };
         let (source, fid) = (lab.source.get_untracked(), lab.frame_id.get_untracked());
+        let camera = lab.sequence.with_untracked(|s| s.camera);
         error.set(None);
         swept.set(None);
         fmat.set(None);
@@ -144,7 +144,7 @@ pub fn WholeFrameView() -> impl IntoView {
                     None
                 }
             };
-            fmat.set(poses.as_ref().and_then(|ab| fundamental(&ab[0], &ab[1], &Camera::default()).ok()));
+            fmat.set(poses.as_ref().and_then(|ab| fundamental(&ab[0], &ab[1], &camera).ok()));
             let t0 = crate::platform::now_ms();
             let poses = poses.map(Box::new);
             let (p2, c2) = (p.clone(), c.clone());
@@ -153,6 +153,7 @@ pub fn WholeFrameView() -> impl IntoView {
                 prev,
                 cur,
                 poses,
+                camera,
                 px,
                 move |stage| status.set(stage),
                 move |r| match r {

@@ -72,6 +72,27 @@ pub(crate) fn get_vec3(o: &JsValue, k: &str) -> Result<Option<[f64; 3]>, String>
     vec3_field(k, &a).map(Some)
 }
 
+/// A camera's intrinsics as a message field: fx, fy, cx, cy, checked as
+/// the odometry checks them.
+pub fn camera_field(k: &str, a: &[f64]) -> Result<siftlab_core::vo::Camera, String> {
+    let [fx, fy, cx, cy] = <[f64; 4]>::try_from(a).map_err(|_| format!("message field {k} needs 4 numbers"))?;
+    let cam = siftlab_core::vo::Camera { fx, fy, cx, cy };
+    cam.validate().map_err(|e| format!("message field {k}: {e}"))?;
+    Ok(cam)
+}
+
+pub(crate) fn set_camera(o: &Object, k: &str, c: &siftlab_core::vo::Camera) {
+    set(o, k, &js_sys::Float64Array::from([c.fx, c.fy, c.cx, c.cy].as_slice()).into());
+}
+
+pub(crate) fn get_camera(o: &JsValue, k: &str) -> Result<siftlab_core::vo::Camera, String> {
+    let a = get(o, k)?
+        .dyn_into::<js_sys::Float64Array>()
+        .map_err(|_| format!("message field {k} is not a Float64Array"))?
+        .to_vec();
+    camera_field(k, &a)
+}
+
 pub(crate) fn vec3(v: &[f64; 3]) -> JsValue {
     js_sys::Float64Array::from(v.as_slice()).into()
 }

@@ -2,14 +2,15 @@
 //! of one frame, and the whole-frame sweep of a pair.
 
 use super::codec::{
-    get, get_f32s, get_f64, get_features, get_str, get_typed, get_u32, kind, set, set_failed, set_features,
-    set_image_job, set_progress,
+    get, get_camera, get_f32s, get_f64, get_features, get_str, get_typed, get_u32, kind, set, set_camera, set_failed,
+    set_features, set_image_job, set_progress,
 };
 use js_sys::{Array, Float32Array, Float64Array, Object, Uint32Array, Uint8Array};
 use siftlab_core::dataset::PoseRow;
 use siftlab_core::matching::sweep::{Curve, Sweep};
 use siftlab_core::matching::StrategyKind;
 use siftlab_core::sift::Features;
+use siftlab_core::vo::Camera;
 use wasm_bindgen::{JsCast, JsValue};
 
 /// Page → worker.
@@ -18,8 +19,9 @@ pub enum InsideRequest {
     /// SIFT's anatomy of the image `bytes` (OpenCV SIMD width `lanes`).
     Anatomy { id: u32, bytes: Vec<u8>, lanes: u32 },
     /// The sweep of `prev` against `cur`, judged by the poses' epipolar
-    /// geometry within `px` pixels when the poses are known.
-    WholeFrame { id: u32, prev: Features, cur: Features, poses: Option<Box<[PoseRow; 2]>>, px: f64 },
+    /// geometry (with the sequence's `camera`) within `px` pixels when the
+    /// poses are known.
+    WholeFrame { id: u32, prev: Features, cur: Features, poses: Option<Box<[PoseRow; 2]>>, camera: Camera, px: f64 },
 }
 
 /// One pyramid level, subsampled for display (`step` octave pixels per
@@ -115,8 +117,9 @@ impl InsideRequest {
         let o = Object::new();
         match self {
             InsideRequest::Anatomy { id, bytes, lanes } => set_image_job(&o, "anatomy", *id, bytes, *lanes),
-            InsideRequest::WholeFrame { id, prev, cur, poses, px } => {
+            InsideRequest::WholeFrame { id, prev, cur, poses, camera, px } => {
                 set(&o, "type", &"wholeFrame".into());
+                set_camera(&o, "camera", camera);
                 set(&o, "id", &(*id).into());
                 set(&o, "px", &(*px).into());
                 set_features(&o, "prev", prev);
@@ -157,6 +160,7 @@ impl InsideRequest {
                     prev: get_features(v, "prev")?,
                     cur: get_features(v, "cur")?,
                     poses,
+                    camera: get_camera(v, "camera")?,
                     px: get_f64(v, "px")?,
                 })
             })()),

@@ -5,7 +5,7 @@
 use super::codec::*;
 use js_sys::{Object, Uint8Array};
 use siftlab_core::sift::Features;
-use siftlab_core::vo::StepDetail;
+use siftlab_core::vo::{Camera, StepDetail};
 use wasm_bindgen::{JsCast, JsValue};
 
 /// Page → tracking worker.
@@ -13,11 +13,11 @@ use wasm_bindgen::{JsCast, JsValue};
 pub enum VoRequest {
     /// Starts the lab's loop (Lucas–Kanade) over `total` frames, fed one
     /// [`VoRequest::Frame`] at a time.
-    Start { id: u32, total: u32, poses: String },
+    Start { id: u32, total: u32, poses: String, camera: Camera },
     /// Starts the loop driven by the student's matcher (`vo::matched`)
     /// instead of LK; its frames come as [`VoRequest::Features`] (or as
     /// `Frame`s, on which the worker runs SIFT itself).
-    MatchedStart { id: u32, total: u32, poses: String, algo: String, threshold: Option<f64> },
+    MatchedStart { id: u32, total: u32, poses: String, camera: Camera, algo: String, threshold: Option<f64> },
     /// The run's next frame, with its keypoints if the page's SIFT workers
     /// computed them (`None`: the tracker detects itself where the loop
     /// re-detects; frame 1 never does).
@@ -105,17 +105,19 @@ impl VoRequest {
     pub fn to_js(&self) -> JsValue {
         let o = Object::new();
         match self {
-            VoRequest::Start { id, total, poses } => {
+            VoRequest::Start { id, total, poses, camera } => {
                 set(&o, "type", &"voStart".into());
                 set(&o, "id", &(*id).into());
                 set(&o, "total", &(*total).into());
                 set(&o, "poses", &poses.as_str().into());
+                set_camera(&o, "camera", camera);
             }
-            VoRequest::MatchedStart { id, total, poses, algo, threshold } => {
+            VoRequest::MatchedStart { id, total, poses, camera, algo, threshold } => {
                 set(&o, "type", &"voMatchedStart".into());
                 set(&o, "id", &(*id).into());
                 set(&o, "total", &(*total).into());
                 set(&o, "poses", &poses.as_str().into());
+                set_camera(&o, "camera", camera);
                 set(&o, "algo", &algo.as_str().into());
                 set(&o, "threshold", &threshold.map_or(JsValue::NULL, JsValue::from));
             }
@@ -141,11 +143,17 @@ impl VoRequest {
         let parse = |k: &str| -> Result<Self, String> {
             let id = get_u32(v, "id")?;
             Ok(match k {
-                "voStart" => VoRequest::Start { id, total: get_u32(v, "total")?, poses: get_str(v, "poses")? },
+                "voStart" => VoRequest::Start {
+                    id,
+                    total: get_u32(v, "total")?,
+                    poses: get_str(v, "poses")?,
+                    camera: get_camera(v, "camera")?,
+                },
                 "voMatchedStart" => VoRequest::MatchedStart {
                     id,
                     total: get_u32(v, "total")?,
                     poses: get_str(v, "poses")?,
+                    camera: get_camera(v, "camera")?,
                     algo: get_str(v, "algo")?,
                     threshold: get(v, "threshold")?.as_f64(),
                 },

@@ -100,16 +100,17 @@ pub fn anatomy(
 }
 
 /// The threshold sweep of `prev` against `cur`, judged by the poses'
-/// epipolar geometry within `px` pixels when the poses are known.
+/// epipolar geometry (seen by `camera`) within `px` pixels when the poses are known.
 pub fn sweep(
     prev: Features,
     cur: Features,
     poses: Option<Box<[PoseRow; 2]>>,
+    camera: siftlab_core::vo::Camera,
     px: f64,
     progress: impl Fn(String) + 'static,
     done: impl FnOnce(Result<Box<SweepData>, String>) + 'static,
 ) -> Result<(), String> {
-    run(InsideRequest::WholeFrame { id: 1, prev, cur, poses, px }, progress, move |m| {
+    run(InsideRequest::WholeFrame { id: 1, prev, cur, poses, camera, px }, progress, move |m| {
         done(match m {
             InsideReply::WholeFrame { data, .. } => Ok(data),
             InsideReply::Failed { message, .. } => Err(message),

@@ -5,9 +5,12 @@
 use crate::model::frame::FrameData;
 use crate::model::frameset::{first_pair, has_pair, missing_pair_message};
 use crate::model::lab::{Job, Lab, Source, Which};
+use crate::model::sequence::{default_sequence, sequence_option, SequenceInfo};
 use crate::platform::now_ms;
 use crate::services::sift_pool;
 use leptos::prelude::*;
+use siftlab_core::dataset::{check_same_size, scan_paths, sequence_camera, SequenceFiles, SequenceLayout};
+use siftlab_core::vo::Camera;
 use std::cell::RefCell;
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -18,26 +21,37 @@ use wasm_bindgen_futures::JsFuture;
 /// core's pixel limit is anywhere near it.
 pub const MAX_FILE_BYTES: f64 = 200.0 * 1024.0 * 1024.0;
 
-/// The lab's layout inside a MyKITTI folder (the core's `gray/00/image_0/%06d.png`).
+/// Frame `id`'s path in the current source's sequence: the demo's
+/// `gray/00/image_0/%06d.png`, or the picked folder's (`sequences/03/image_0/…`).
+/// Frames are labelled by it.
 pub fn frame_path(id: u32) -> String {
-    siftlab_core::dataset::frame_relative_path(id as usize)
+    LABELS.with(|s| s.borrow().frame_path(id as usize))
 }
 
-/// The frame id of a path inside a MyKITTI folder, if it is one of its frames.
-pub fn frame_id_of(path: &str) -> Option<u32> {
-    let dir = format!("{}/", siftlab_core::dataset::FRAME_DIR);
-    let rest = path.rsplit_once(dir.as_str())?.1;
-    let digits = rest.strip_suffix(".png")?;
-    if digits.len() == 6 && digits.bytes().all(|b| b.is_ascii_digit()) {
-        digits.parse().ok()
-    } else {
-        None
-    }
+/// A picked folder: its files and the sequences found among their paths.
+struct Picked {
+    files: Vec<web_sys::File>,
+    scan: BTreeMap<SequenceLayout, SequenceFiles>,
+}
+
+/// The sequence in use from a picked folder: its frames by id, its poses
+/// file if any, and its camera.
+struct Folder {
+    seq: SequenceLayout,
+    frames: BTreeMap<u32, web_sys::File>,
+    poses: Option<web_sys::File>,
+    camera: Camera,
 }
 
 thread_local! {
-    static FOLDER: RefCell<BTreeMap<u32, web_sys::File>> = const { RefCell::new(BTreeMap::new()) };
-    static FOLDER_POSES: RefCell<Option<web_sys::File>> = const { RefCell::new(None) };
+    static PICKED: RefCell<Option<Picked>> = const { RefCell::new(None) };
+    static FOLDER: RefCell<Option<Folder>> = const { RefCell::new(None) };
+    /// The layout frame labels follow (the demo's or the folder's sequence).
+    static LABELS: RefCell<SequenceLayout> = RefCell::new(SequenceLayout::lab());
+}
+
+fn folder_file(id: u32) -> Option<web_sys::File> {
+    FOLDER.with(|f| f.borrow().as_ref().and_then(|f| f.frames.get(&id).cloned()))
 }
 
 static NEXT_JOB: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
@@ -195,7 +209,7 @@ fn load_pair_from(lab: Lab, frame_id: u32, fresh: bool) {
             let job = start_job(lab, format!("{}: {path}", which.name()), "reading the file");
             let bytes = match source {
                 Source::Demo(_) => fetch_bytes(&format!("demo/{path}")).await,
-                _ => match FOLDER.with(|f| f.borrow().get(&id).cloned()) {
+                _ => match folder_file(id) {
                     Some(file) => read_file(&file).await,
                     None => Err("the frame is no longer available; open the folder again".into()),
                 },
@@ -239,50 +253,92 @@ pub fn load_demo(lab: Lab, frame_id: Option<u32>) {
             // FRAME_ID box shows what was asked, and the message below says why.
             lab.frame_id.set(fid);
         }
+        LABELS.with(|s| *s.borrow_mut() = SequenceLayout::lab());
+        lab.sequence.set(SequenceInfo::demo());
         lab.source.set(Source::Demo(ids));
         load_pair_from(lab, fid, true);
     });
 }
 
-/// The files of a directory picker: keeps the frames in the lab's layout.
+/// The files of a directory picker: finds the KITTI sequences in them (the
+/// lab's layout or KITTI's) and opens one ([`use_sequence`]).
 pub fn open_folder(lab: Lab, files: web_sys::FileList, frame_id: Option<u32>) {
-    let mut frames = BTreeMap::new();
-    let mut poses = None;
-    let mut any = false;
+    let mut all = Vec::new();
+    let mut paths = Vec::new();
     for i in 0..files.length() {
         if let Some(f) = files.get(i) {
-            any = true;
             let path = js_sys::Reflect::get(&f, &"webkitRelativePath".into())
                 .ok()
                 .and_then(|v| v.as_string())
                 .filter(|p| !p.is_empty())
                 .unwrap_or_else(|| f.name());
-            if let Some(id) = frame_id_of(&path) {
-                frames.insert(id, f);
-            } else if path.ends_with("poses/00.txt") {
-                poses = Some(f);
-            }
+            paths.push(path);
+            all.push(f);
         }
     }
-    if !any {
+    if all.is_empty() {
         return;
     }
-    if frames.is_empty() {
+    let scan = scan_paths(paths.iter().map(String::as_str));
+    if scan.is_empty() {
         lab.load_error.set(Some(
-            "this folder is not in the MyKITTI layout: no gray/00/image_0/NNNNNN.png frames found \
-             (open the folder that contains gray/ and poses/)"
+            "this folder holds no KITTI frames: expected gray/NN/image_0/NNNNNN.png (the lab's MyKITTI layout) \
+             or sequences/NN/image_0/NNNNNN.png (KITTI's odometry layout); open the folder that contains gray/ \
+             or sequences/ (and poses/)"
                 .into(),
         ));
         return;
     }
-    let ids: Vec<u32> = frames.keys().copied().collect();
-    FOLDER.with(|f| *f.borrow_mut() = frames);
-    FOLDER_POSES.with(|p| *p.borrow_mut() = poses);
-    // A folder in the right layout settles any earlier loading error.
-    lab.load_error.set(None);
-    let fid = frame_id.or_else(|| first_pair(&ids)).unwrap_or(1);
-    lab.source.set(Source::Folder(ids));
-    load_pair_from(lab, fid, true);
+    let current = matches!(lab.source.get_untracked(), Source::Folder(_)).then(|| lab.sequence.get_untracked().seq);
+    let Some(key) = default_sequence(scan.keys(), current.as_ref()) else { return };
+    lab.folder_sequences.set(scan.iter().map(|(k, f)| (k.clone(), sequence_option(k, f))).collect());
+    PICKED.with(|p| *p.borrow_mut() = Some(Picked { files: all, scan }));
+    use_sequence(lab, key, frame_id);
+}
+
+/// Opens sequence `key` of the picked folder: reads its camera (its
+/// `calib.txt`, or the lab's 00 camera in the lab's layout without one) and
+/// shows its pair FRAME_ID (or its first). A camera that cannot be read
+/// leaves what was shown and says why.
+pub fn use_sequence(lab: Lab, key: SequenceLayout, frame_id: Option<u32>) {
+    let picked = PICKED.with(|p| {
+        p.borrow().as_ref().and_then(|p| {
+            let files = p.scan.get(&key)?;
+            let file = |i: usize| p.files[i].clone();
+            let frames: BTreeMap<u32, web_sys::File> = files.frames.iter().map(|(&id, &i)| (id, file(i))).collect();
+            Some((frames, files.poses.map(file), files.calib.map(file)))
+        })
+    });
+    let Some((frames, poses, calib)) = picked else {
+        lab.load_error.set(Some(format!("the folder has no {}: open the folder again", key.describe())));
+        return;
+    };
+    leptos::task::spawn_local(async move {
+        let calib_text = match calib {
+            Some(file) => match read_file(&file)
+                .await
+                .and_then(|b| String::from_utf8(b).map_err(|_| format!("{} is not a text file", key.calib_file())))
+            {
+                Ok(t) => Some(t),
+                Err(e) => return lab.load_error.set(Some(format!("{}: {e}", key.calib_file()))),
+            },
+            None => None,
+        };
+        let (camera, camera_source) = match sequence_camera(&key, calib_text.as_deref()) {
+            Ok(c) => c,
+            Err(e) => return lab.load_error.set(Some(e.to_string())),
+        };
+        let ids: Vec<u32> = frames.keys().copied().collect();
+        let info = SequenceInfo { seq: key.clone(), camera, camera_source, has_poses: poses.is_some() };
+        FOLDER.with(|f| *f.borrow_mut() = Some(Folder { seq: key.clone(), frames, poses, camera }));
+        LABELS.with(|s| *s.borrow_mut() = key);
+        lab.sequence.set(info);
+        // A sequence that opens settles any earlier loading error.
+        lab.load_error.set(None);
+        let fid = frame_id.filter(|&f| has_pair(&ids, f)).or_else(|| first_pair(&ids)).unwrap_or(1);
+        lab.source.set(Source::Folder(ids));
+        load_pair_from(lab, fid, true);
+    });
 }
 
 /// Re-runs SIFT on the loaded frames (after the SIMD width changed).
@@ -296,22 +352,30 @@ pub fn reanalyse(lab: Lab) {
     }
 }
 
-/// Frame `id`'s file of the current source (the demo or a MyKITTI folder).
+/// Frame `id`'s file of the current source (the demo or a folder's sequence).
 pub async fn frame_bytes(source: &Source, id: u32) -> Result<Vec<u8>, String> {
     match source {
         Source::Demo(_) => fetch_bytes(&format!("demo/{}", frame_path(id))).await,
         Source::Folder(_) => {
-            let file = FOLDER.with(|f| f.borrow().get(&id).cloned()).ok_or("open the folder again")?;
+            let file = folder_file(id).ok_or("open the folder again")?;
             read_file(&file).await.map_err(|e| format!("{}: {e}", frame_path(id)))
         }
         Source::Files => Err("marking needs the demo or a MyKITTI folder (frame pairs by FRAME_ID)".into()),
     }
 }
 
-/// Frames 0..n and the ground-truth poses of the current source, for the
-/// odometry view (the lab's `view_trajectory FRAME_ID` runs frames 0 … FRAME_ID,
-/// so n = FRAME_ID + 1).
-pub async fn vo_inputs(source: &Source, n: u32) -> Result<(Vec<Vec<u8>>, String), String> {
+/// What the odometry runs on: frames 0..n, the ground-truth poses (the
+/// lab's loop takes each frame's scale from them) and the sequence's camera.
+pub struct VoInputs {
+    pub frames: Vec<Vec<u8>>,
+    pub poses: String,
+    pub camera: Camera,
+}
+
+/// Frames 0..n, the ground-truth poses and the camera of the current source,
+/// for the odometry view (the lab's `view_trajectory FRAME_ID` runs frames
+/// 0 … FRAME_ID, so n = FRAME_ID + 1). Every frame must have frame 0's size.
+pub async fn vo_inputs(source: &Source, n: u32) -> Result<VoInputs, String> {
     if let Some(missing) = (0..n).find(|i| !source.frames().contains(i)) {
         return Err(format!(
             "{} is missing: the odometry needs frames 0 … {}",
@@ -320,45 +384,60 @@ pub async fn vo_inputs(source: &Source, n: u32) -> Result<(Vec<Vec<u8>>, String)
         ));
     }
     let mut frames = Vec::with_capacity(n as usize);
-    let poses = match source {
+    let (poses, camera, seq) = match source {
         Source::Demo(_) => {
             for i in 0..n {
                 frames.push(fetch_bytes(&format!("demo/{}", frame_path(i))).await?);
             }
-            fetch_text("demo/poses/00.txt").await?
+            (fetch_text("demo/poses/00.txt").await?, Camera::default(), SequenceLayout::lab())
         }
         Source::Folder(_) => {
+            let (seq, poses, camera) = FOLDER
+                .with(|f| f.borrow().as_ref().map(|f| (f.seq.clone(), f.poses.clone(), f.camera)))
+                .ok_or("open the folder again")?;
+            let poses = poses.ok_or_else(|| {
+                format!(
+                    "the folder has no {}: the odometry needs the ground-truth poses (the lab's loop takes each \
+                     frame's scale from them; KITTI publishes poses for sequences 00 to 10 only)",
+                    seq.poses_file()
+                )
+            })?;
             for i in 0..n {
-                let file = FOLDER.with(|f| f.borrow().get(&i).cloned()).ok_or("open the folder again")?;
+                let file = folder_file(i).ok_or("open the folder again")?;
                 frames.push(read_file(&file).await.map_err(|e| format!("{}: {e}", frame_path(i)))?);
             }
-            let file = FOLDER_POSES
-                .with(|p| p.borrow().clone())
-                .ok_or("the folder has no poses/00.txt: the lab takes the scale from the ground-truth poses")?;
-            let bytes = read_file(&file).await?;
-            String::from_utf8(bytes).map_err(|_| "poses/00.txt is not text".to_string())?
+            let bytes = read_file(&poses).await?;
+            let text = String::from_utf8(bytes).map_err(|_| format!("{} is not text", seq.poses_file()))?;
+            (text, camera, seq)
         }
         Source::Files => return Err("the odometry needs the demo or a MyKITTI folder (frames 0, 1, 2, …)".into()),
     };
-    Ok((frames, poses))
+    check_same_size(&frames, &seq).map_err(|e| e.to_string())?;
+    Ok(VoInputs { frames, poses, camera })
 }
 
 /// The ground-truth poses of frames FRAME_ID-1 and FRAME_ID when the source
-/// has them (the demo, a folder with poses/00.txt); `None` for files picked
-/// one by one, which the whole-frame view then counts without judging.
+/// has them (the demo, a folder with poses/NN.txt); `None` for files picked
+/// one by one or a sequence without poses, which the whole-frame view then
+/// counts without judging.
 pub async fn pair_poses(source: &Source, frame_id: u32) -> Result<Option<[siftlab_core::dataset::PoseRow; 2]>, String> {
-    let text = match source {
-        Source::Demo(_) => fetch_text("demo/poses/00.txt").await?,
-        Source::Folder(_) => match FOLDER_POSES.with(|p| p.borrow().clone()) {
-            Some(file) => String::from_utf8(read_file(&file).await?).map_err(|_| "poses/00.txt is not text")?,
-            None => return Ok(None),
-        },
+    let (text, file) = match source {
+        Source::Demo(_) => (fetch_text("demo/poses/00.txt").await?, siftlab_core::dataset::POSES_FILE.to_string()),
+        Source::Folder(_) => {
+            let Some((seq, poses)) = FOLDER.with(|f| f.borrow().as_ref().map(|f| (f.seq.clone(), f.poses.clone())))
+            else {
+                return Ok(None);
+            };
+            let Some(file) = poses else { return Ok(None) };
+            let name = seq.poses_file();
+            (String::from_utf8(read_file(&file).await?).map_err(|_| format!("{name} is not text"))?, name)
+        }
         Source::Files => return Ok(None),
     };
-    let poses = siftlab_core::dataset::parse_poses(&text).map_err(|e| format!("poses/00.txt: {e}"))?;
+    let poses = siftlab_core::dataset::parse_poses_in(&text, &file).map_err(|e| e.to_string())?;
     let i = frame_id as usize;
     match (i.checked_sub(1).and_then(|p| poses.get(p)), poses.get(i)) {
         (Some(a), Some(b)) => Ok(Some([*a, *b])),
-        _ => Err(format!("poses/00.txt has {} poses: frame {frame_id} has none", poses.len())),
+        _ => Err(format!("{file} has {} poses: frame {frame_id} has none", poses.len())),
     }
 }

@@ -10,6 +10,7 @@
 
 use crate::protocol::odometry::{VoReply, VoRequest};
 use crate::protocol::Request;
+use crate::services::loading::VoInputs;
 use crate::services::sift_pool;
 use crate::services::worker_handle::WorkerHandle;
 use siftlab_core::matching::Strategy;
@@ -73,16 +74,16 @@ fn lookahead() -> usize {
 }
 
 /// Starts `trackers` (`None`: LK; else the strategy's matched loop) side by
-/// side on `frames` with the ground truth `poses`; `on_event(k, m)` gets
+/// side on `inputs` (frames, ground truth and camera); `on_event(k, m)` gets
 /// tracker k's `VoStep`s, `VoMetrics` and `VoDone`, or its `Failed`. A new
 /// run replaces the previous one.
 pub fn start(
-    frames: Vec<Vec<u8>>,
-    poses: String,
+    inputs: VoInputs,
     trackers: &[Option<Strategy>],
     on_event: impl Fn(usize, VoReply) + 'static,
 ) -> Result<(), String> {
     stop();
+    let VoInputs { frames, poses, camera } = inputs;
     let generation = GENERATION.with(|g| {
         g.set(g.get().wrapping_add(1));
         g.get()
@@ -98,11 +99,12 @@ pub fn start(
             move || on_tracker_crash(generation, k),
         )?;
         handle.send(&Request::Odometry(match strategy {
-            None => VoRequest::Start { id: VO_ID, total, poses: poses.clone() },
+            None => VoRequest::Start { id: VO_ID, total, poses: poses.clone(), camera },
             Some(s) => VoRequest::MatchedStart {
                 id: VO_ID,
                 total,
                 poses: poses.clone(),
+                camera,
                 algo: s.name().into(),
                 threshold: s.threshold(),
             },

@@ -7,7 +7,6 @@ use siftlab_core::matching::epipolar::fundamental;
 use siftlab_core::matching::sweep::sweep;
 use siftlab_core::sift::anatomy::{anatomy, subsample, Anatomy, Rejection};
 use siftlab_core::sift::SiftParams;
-use siftlab_core::vo::Camera;
 use siftlab_core::GrayImage;
 
 /// Thumbnails are at most this wide (the first octave, 2482 px on KITTI, is
@@ -103,10 +102,10 @@ pub fn handle(req: InsideRequest, post: &dyn Fn(InsideReply)) {
             let data = pack_anatomy(&a, now_ms() - t0);
             post(InsideReply::Anatomy { id, data: Box::new(data) });
         }
-        InsideRequest::WholeFrame { id, prev, cur, poses, px } => {
+        InsideRequest::WholeFrame { id, prev, cur, poses, camera, px } => {
             post(InsideReply::Progress { id, stage: "every distance of the pair, sorted once".into() });
             let t0 = now_ms();
-            let f = match poses.map(|ab| fundamental(&ab[0], &ab[1], &Camera::default())).transpose() {
+            let f = match poses.map(|ab| fundamental(&ab[0], &ab[1], &camera)).transpose() {
                 Ok(f) => f,
                 Err(e) => return post(InsideReply::Failed { id, message: e.to_string() }),
             };

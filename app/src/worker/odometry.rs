@@ -3,24 +3,25 @@
 
 use crate::platform::now_ms;
 use crate::protocol::odometry::{StepCounts, VoReply, VoRequest};
+use siftlab_core::vo::Camera;
 use siftlab_core::GrayImage;
 
 /// Handles one request of the worker's odometry run, posting its steps, its
 /// metrics and its end, or why it failed (which ends the run).
 pub fn handle(req: VoRequest, post: &dyn Fn(VoReply)) {
     match req {
-        VoRequest::Start { id, total, poses } => {
-            let started = VoSession::start(id, total as usize, &poses);
+        VoRequest::Start { id, total, poses, camera } => {
+            let started = VoSession::start(id, total as usize, &poses, camera);
             let failed = started.as_ref().err().cloned();
             SESSION.with(|s| *s.borrow_mut() = started.ok());
             if let Some(message) = failed {
                 post(VoReply::Failed { id, message });
             }
         }
-        VoRequest::MatchedStart { id, total, poses, algo, threshold } => {
+        VoRequest::MatchedStart { id, total, poses, camera, algo, threshold } => {
             let started = siftlab_core::matching::Strategy::parse(&algo, threshold)
                 .map_err(|e| e.to_string())
-                .and_then(|s| VoSession::start(id, total as usize, &poses).map(|v| v.with_matcher(s)))
+                .and_then(|s| VoSession::start(id, total as usize, &poses, camera).map(|v| v.with_matcher(s)))
                 .and_then(|r| r);
             let failed = started.as_ref().err().cloned();
             SESSION.with(|s| *s.borrow_mut() = started.ok());
@@ -68,6 +69,8 @@ struct VoSession {
     id: u32,
     total: usize,
     poses: Vec<siftlab_core::dataset::PoseRow>,
+    /// The sequence's camera (its calib.txt, or the lab's 00 camera).
+    camera: Camera,
     odo: siftlab_core::vo::Odometry,
     /// Set for a run driven by the student's matcher (`odo` then unused).
     matched: Option<siftlab_core::vo::MatchedOdometry>,
@@ -80,28 +83,39 @@ struct VoSession {
 
 impl VoSession {
     /// Checks the poses before any frame is read, as the CLI does.
-    fn start(id: u32, total: usize, poses: &str) -> Result<Self, String> {
-        use siftlab_core::dataset::parse_poses;
-        use siftlab_core::vo::{Camera, Odometry};
+    fn start(id: u32, total: usize, poses: &str, camera: Camera) -> Result<Self, String> {
+        use siftlab_core::dataset::parse_poses_in;
+        use siftlab_core::vo::Odometry;
         let t0 = now_ms();
-        let poses = parse_poses(poses).map_err(|e| format!("poses/00.txt: {e}"))?;
+        let poses = parse_poses_in(poses, "the poses file").map_err(|e| e.to_string())?;
         if poses.len() < total {
             return Err(format!(
-                "poses/00.txt has {} poses but {} frames were asked for: the lab takes the scale from the ground truth of every frame",
+                "the poses file has {} poses but {} frames were asked for: the lab takes the scale from the ground truth of every frame",
                 poses.len(),
                 total
             ));
         }
-        let mut odo = Odometry::new(Camera::default()).map_err(|e| e.to_string())?;
+        let mut odo = Odometry::new(camera).map_err(|e| e.to_string())?;
         // The page draws each frame's points (the odometry's own view).
         odo.record_detail = true;
-        Ok(VoSession { id, total, poses, odo, matched: None, rows: Vec::new(), est: Vec::new(), truth: Vec::new(), t0 })
+        Ok(VoSession {
+            id,
+            total,
+            poses,
+            camera,
+            odo,
+            matched: None,
+            rows: Vec::new(),
+            est: Vec::new(),
+            truth: Vec::new(),
+            t0,
+        })
     }
 
     /// The same session tracking with `strategy`'s matches instead of LK.
     fn with_matcher(mut self, strategy: siftlab_core::matching::Strategy) -> Result<Self, String> {
-        use siftlab_core::vo::{Camera, MatchedOdometry};
-        let mut m = MatchedOdometry::new(Camera::default(), strategy).map_err(|e| e.to_string())?;
+        use siftlab_core::vo::MatchedOdometry;
+        let mut m = MatchedOdometry::new(self.camera, strategy).map_err(|e| e.to_string())?;
         m.record_detail = true;
         self.matched = Some(m);
         Ok(self)

@@ -7,9 +7,13 @@ use std::path::PathBuf;
 #[derive(Parser, Debug)]
 #[command(name = "siftlab", version, about = "The COMP24011 feature-matching lab (OpenCV 4.8 SIFT) in Rust")]
 pub struct Cli {
-    /// The MyKITTI dataset folder (gray/00/image_0/NNNNNN.png, poses/00.txt).
-    #[arg(short = 'd', long = "dataset", default_value = "~/MyKITTI")]
+    /// The dataset folder: the lab's MyKITTI layout (gray/NN/image_0/NNNNNN.png, poses/NN.txt)
+    /// or KITTI's (sequences/NN/image_0/, sequences/NN/calib.txt, poses/NN.txt).
+    #[arg(short = 'd', long = "dataset", default_value = "~/MyKITTI", global = true)]
     pub dataset: String,
+    /// The KITTI sequence to read (00 to 21); its camera comes from its calib.txt.
+    #[arg(short = 's', long = "sequence", default_value = "00", global = true)]
+    pub sequence: String,
     /// SIMD width OpenCV's SIFT ran with on the reference machine (8 = AVX2,
     /// 16 = AVX-512); default: what OpenCV would use on this CPU.
     #[arg(long = "opencv-lanes", value_parser = ["8", "16"], global = true)]

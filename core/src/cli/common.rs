@@ -2,10 +2,11 @@
 //! dataset's frames, and the matched pair the visual commands draw.
 
 use super::args::Cli;
-use crate::error::{Error, Result};
+use crate::dataset::Dataset;
+use crate::error::Result;
 use crate::image::GrayImage;
 use crate::sift::{Features, SiftParams};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 pub(crate) fn sift_params(cli: &Cli) -> SiftParams {
     match cli.opencv_lanes.as_deref() {
@@ -41,25 +42,15 @@ pub(crate) fn expand_home(p: &str) -> PathBuf {
     PathBuf::from(p)
 }
 
-/// The lab's frame file: `gray/00/image_0/%06d.png` under the dataset.
-pub fn frame_path(root: &Path, id: usize) -> PathBuf {
-    root.join("gray").join("00").join("image_0").join(format!("{id:06}.png"))
+/// The sequence `-d` and `-s` name, in whichever layout holds it.
+pub(crate) fn open_dataset(cli: &Cli) -> Result<Dataset> {
+    Dataset::open_sequence(&expand_home(&cli.dataset), &cli.sequence)
 }
 
-pub(crate) fn load_frame(root: &Path, id: usize) -> Result<GrayImage> {
-    let path = frame_path(root, id);
-    let bytes = std::fs::read(&path).map_err(|e| {
-        if !root.is_dir() {
-            Error::Dataset(format!(
-                "dataset folder {} not found: pass the MyKITTI folder with -d (it holds gray/00/image_0/ and poses/00.txt)",
-                root.display()
-            ))
-        } else {
-            Error::Dataset(format!(
-                "cannot read frame {id}: {} ({e}); the dataset needs gray/00/image_0/{id:06}.png",
-                path.display()
-            ))
-        }
-    })?;
-    GrayImage::decode(&bytes).map_err(|e| Error::Decode(format!("frame {} : {e}", path.display())))
+/// Says once, on stderr, which camera a command that uses it runs with
+/// when it is not the sequence's own `calib.txt`.
+pub(crate) fn note_camera(ds: &Dataset) {
+    if let Some(note) = ds.camera_note() {
+        eprintln!("{note}");
+    }
 }

@@ -7,7 +7,8 @@
 //! 1 for fewer marks, 2 when the file could not be marked at all.
 
 use super::args::{Cli, MarkArgs};
-use super::common::{expand_home, frame_path, load_frame, sift_params};
+use super::common::{open_dataset, sift_params};
+use crate::dataset::Dataset;
 use crate::error::{Error, Result};
 use crate::mark::{
     call_message, check_source, failed_call, judge, knn_answer, load_message, pair_message, parse_json, parse_line,
@@ -63,15 +64,15 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
             Marks::rejected(a.seed, n, rejection)
         }
         Ok(source) => {
-            let root = expand_home(&cli.dataset);
-            let frames = frame_ids(&root)?;
+            let ds = open_dataset(cli)?;
+            let frames = frame_ids(&ds)?;
             eprintln!(
                 "marking {name}: {n} calls per task, seed {}, frames 1 to {} of {}",
                 a.seed,
                 frames.len(),
-                root.display()
+                ds.root().display()
             );
-            let mut m = Marker::new(root, sift_params(cli))?;
+            let mut m = Marker::new(ds, sift_params(cli))?;
             m.mark(source, &plan(a.seed, n, &frames), a.seed, n)?
         }
     };
@@ -87,24 +88,14 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
 }
 
 /// FRAME_IDs 1.. whose frame and previous frame are in the dataset.
-fn frame_ids(root: &Path) -> Result<Vec<u32>> {
-    let mut count = 0u32;
-    while frame_path(root, count as usize).is_file() {
-        count += 1;
-    }
+fn frame_ids(ds: &Dataset) -> Result<Vec<u32>> {
+    let count = ds.frame_count() as u32;
     if count < 2 {
-        return Err(Error::Dataset(if !root.is_dir() {
-            format!(
-                "dataset folder {} not found: pass the MyKITTI folder with -d (the repository bundles one at \
-                 www/demo/MyKITTI)",
-                root.display()
-            )
-        } else {
-            format!(
-                "{} has {count} frame(s) in gray/00/image_0/ from 000000.png on: marking needs at least two",
-                root.display()
-            )
-        }));
+        return Err(Error::Dataset(format!(
+            "{} has {count} frame(s) in {}/ from 000000.png on: marking needs at least two",
+            ds.root().display(),
+            ds.sequence().frame_dir()
+        )));
     }
     Ok((1..count).collect())
 }
@@ -112,7 +103,7 @@ fn frame_ids(root: &Path) -> Result<Vec<u32>> {
 /// The features of each frame (SIFT once per frame), the pairs built from
 /// them, and the harness process.
 struct Marker {
-    root: PathBuf,
+    ds: Dataset,
     params: SiftParams,
     frames: HashMap<u32, Features>,
     pairs: Vec<Pair>,
@@ -123,14 +114,14 @@ struct Marker {
 }
 
 impl Marker {
-    fn new(root: PathBuf, params: SiftParams) -> Result<Marker> {
+    fn new(ds: Dataset, params: SiftParams) -> Result<Marker> {
         let dir = TempDir::new()?;
         for (file, text) in FILES {
             let path = dir.0.join(file);
             std::fs::write(&path, text)
                 .map_err(|e| Error::InvalidArgument(format!("cannot write {}: {e}", path.display())))?;
         }
-        Ok(Marker { root, params, frames: HashMap::new(), pairs: Vec::new(), dir, harness: None, announced: false })
+        Ok(Marker { ds, params, frames: HashMap::new(), pairs: Vec::new(), dir, harness: None, announced: false })
     }
 
     /// The pair of FRAME_ID `frame` (computed on first use), by its index.
@@ -140,7 +131,7 @@ impl Marker {
         }
         for f in [frame - 1, frame] {
             if !self.frames.contains_key(&f) {
-                let img = load_frame(&self.root, f as usize)?;
+                let img = self.ds.load_frame(f as usize)?;
                 self.frames.insert(f, detect_and_compute(&img, &self.params));
             }
         }

@@ -7,9 +7,7 @@
 //! every match with its distance, Sampson distance and verdict.
 
 use super::args::{Cli, MatchAllArgs};
-use super::common::{expand_home, load_frame, parse_threshold, sift_params};
-use crate::camera::Camera;
-use crate::dataset::{parse_poses, POSES_FILE};
+use super::common::{note_camera, open_dataset, parse_threshold, sift_params};
 use crate::error::{Error, Result};
 use crate::matching::args::parse_index;
 use crate::matching::epipolar::{fundamental, sampsons, Verdicts};
@@ -32,29 +30,31 @@ pub fn run(cli: &Cli, a: &MatchAllArgs) -> Result<()> {
     if frame < 1 {
         return Err(Error::InvalidArgument("FRAME_ID must be >= 1: frames FRAME_ID-1 and FRAME_ID are matched".into()));
     }
-    let root = expand_home(&cli.dataset);
+    let ds = open_dataset(cli)?;
     let params = sift_params(cli);
-    let (prev_image, cur_image) = (load_frame(&root, frame - 1)?, load_frame(&root, frame)?);
+    let (prev_image, cur_image) = (ds.load_frame(frame - 1)?, ds.load_frame(frame)?);
     let (prev, cur) = (detect_and_compute(&prev_image, &params), detect_and_compute(&cur_image, &params));
     let all: Vec<DMatch> = match_all(&strategy, &prev, &cur)?.into_iter().flatten().collect();
     // Without the pose file the matches are counted, not judged.
-    let distances = match std::fs::read_to_string(root.join(POSES_FILE)) {
-        Ok(text) => {
-            let poses = parse_poses(&text)?;
-            let (Some(p0), Some(p1)) = (poses.get(frame - 1), poses.get(frame)) else {
-                return Err(Error::Dataset(format!(
-                    "{POSES_FILE} has {} poses, frame {frame} needs {}",
-                    poses.len(),
-                    frame + 1
-                )));
-            };
-            let f = fundamental(p0, p1, &Camera::default())?;
-            Some(sampsons(&f, &prev.keypoints, &cur.keypoints, &all))
-        }
-        Err(_) => {
-            eprintln!("no {POSES_FILE} in the dataset: counting matches without judging them");
-            None
-        }
+    let poses_file = ds.sequence().poses_file();
+    let distances = if ds.has_poses() {
+        let poses = ds.poses();
+        let (Some(p0), Some(p1)) = (poses.get(frame - 1), poses.get(frame)) else {
+            return Err(Error::Dataset(format!(
+                "{poses_file} has {} poses, frame {frame} needs {}",
+                poses.len(),
+                frame + 1
+            )));
+        };
+        note_camera(&ds);
+        let f = fundamental(p0, p1, ds.camera())?;
+        Some(sampsons(&f, &prev.keypoints, &cur.keypoints, &all))
+    } else {
+        eprintln!(
+            "no {poses_file} in the dataset: counting matches without judging them (the epipolar judge needs the \
+             ground-truth poses)"
+        );
+        None
     };
     // judge's rule, on the distances kept for --json.
     let verdicts: Option<Vec<bool>> = distances.as_ref().map(|d| d.iter().map(|&s| s <= a.epipolar_px).collect());

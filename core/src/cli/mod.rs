@@ -19,8 +19,7 @@ use crate::pyfmt::{py_float, py_str};
 use crate::sift::{detect_and_compute, Features};
 pub use args::{AnatomyArgs, Cli, Command, MarkArgs, MatchAllArgs, MatchArgs, SiftArgs, TrajectoryArgs};
 use clap::Parser;
-pub use common::frame_path;
-use common::{expand_home, load_frame, parse_threshold, sift_params, MatchContext};
+use common::{open_dataset, parse_threshold, sift_params, MatchContext};
 use std::io::Write;
 use std::path::Path;
 
@@ -86,7 +85,8 @@ pub fn run(cli: &Cli) -> Result<()> {
             println!("vo params: ({algo}, {t_repr}, {})", py_str(&cli.dataset));
             println!("debug run: view_trajectory({args})");
             let _ = std::io::stdout().flush();
-            let root = expand_home(&cli.dataset);
+            let ds = open_dataset(cli)?;
+            common::note_camera(&ds);
             let mut last_draw = std::time::Instant::now();
             // Whether the bar's line is open: an error must start on a line
             // of its own, not after "1/3 frames".
@@ -114,7 +114,7 @@ pub fn run(cli: &Cli) -> Result<()> {
                 trace: a.trace.as_deref(),
                 sift: Some(sift_params(cli)),
             };
-            let result = trajectory::view_trajectory(&root, &opts, &a.output, &mut progress);
+            let result = trajectory::view_trajectory(&ds, &opts, &a.output, &mut progress);
             if open && result.is_err() {
                 eprintln!();
             }
@@ -142,10 +142,10 @@ fn run_match(cli: &Cli, a: &MatchArgs, name: &str) -> Result<(MatchInfo, MatchCo
     println!("debug run: {name}({frame}, {feature})");
     let _ = std::io::stdout().flush();
 
-    let root = expand_home(&cli.dataset);
+    let ds = open_dataset(cli)?;
     let params = sift_params(cli);
-    let prev_image = load_frame(&root, frame - 1)?;
-    let cur_image = load_frame(&root, frame)?;
+    let prev_image = ds.load_frame(frame - 1)?;
+    let cur_image = ds.load_frame(frame)?;
     eprintln!("Processing frame {}", frame - 1);
     let prev = detect_and_compute(&prev_image, &params);
     eprintln!("Processing frame {frame}");

@@ -18,7 +18,7 @@ use crate::vo::export::{kitti_text, tum_text};
 use crate::vo::matched::MatchedOdometry;
 use crate::vo::metrics::{ate_rmse, describe_kitti_segments, evaluate, kitti_segments, TrajectoryMetrics};
 use crate::vo::odometry::{pose_row, run, sift_detector};
-use crate::vo::{Camera, Odometry, StepResult};
+use crate::vo::{Odometry, StepResult};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
@@ -127,13 +127,13 @@ fn run_matched_with(
 /// Runs the VO on the first frames, writes `out_png` (the lab's window) and
 /// whatever `opts` asks for. Returns the text to print (on stderr) and the metrics.
 pub fn view_trajectory(
-    dataset: &Path,
+    ds: &Dataset,
     opts: &Options,
     out_png: &Path,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<(String, TrajectoryMetrics)> {
     let svg = opts.plot.map(plot_format).transpose()?;
-    let ds = Dataset::open(dataset)?;
+    ds.require_poses("view_trajectory")?;
     let n = opts.frames.unwrap_or(ds.frame_count().min(ds.poses().len()));
     if n == 0 {
         return Err(Error::InvalidArgument("the trajectory needs at least one frame (frame 0)".into()));
@@ -143,11 +143,11 @@ pub fn view_trajectory(
     let params = opts.sift.clone().unwrap_or_else(SiftParams::for_host);
     let steps: Vec<StepResult> = match &opts.strategy {
         None => {
-            let mut odo = Odometry::with_detector(Camera::default(), sift_detector(params))?;
+            let mut odo = Odometry::with_detector(*ds.camera(), sift_detector(params))?;
             run(&mut odo, n, ds.poses(), |i| ds.load_frame(i), progress)?
         }
         Some(s) => {
-            let mut odo = MatchedOdometry::new(Camera::default(), *s)?;
+            let mut odo = MatchedOdometry::new(*ds.camera(), *s)?;
             run_matched_with(&mut odo, n, ds.poses(), |i| ds.load_frame(i), &params, progress)?
         }
     };
@@ -214,8 +214,8 @@ mod tests {
     use std::path::PathBuf;
 
     /// The bundled real KITTI frames.
-    fn fixture() -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI")
+    fn fixture() -> Dataset {
+        Dataset::open(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI")).unwrap()
     }
 
     fn tmp(name: &str) -> PathBuf {
@@ -275,10 +275,9 @@ mod tests {
         assert!(e.contains("at least one frame"), "{e}");
         let e = view_trajectory(&fixture(), &frames(152), &png, &mut nop).unwrap_err().to_string();
         assert!(e.contains("frames 0 to 151 are needed but") && e.contains("has frames 0 to 150 only"), "{e}");
-        let e = view_trajectory(Path::new("/nonexistent/MyKITTI"), &Options::default(), &png, &mut nop)
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("dataset folder /nonexistent/MyKITTI does not exist"), "{e}");
+        let no_poses = Dataset::from_parts("picked".into(), 3, None);
+        let e = view_trajectory(&no_poses, &frames(2), &png, &mut nop).unwrap_err().to_string();
+        assert!(e.starts_with("view_trajectory needs the ground-truth poses poses/00.txt"), "{e}");
         let plot = Path::new("plot.jpg");
         let bad = Options { plot: Some(plot), ..Options::default() };
         let e = view_trajectory(&fixture(), &bad, &png, &mut nop).unwrap_err().to_string();
