@@ -532,6 +532,91 @@ test(`visual odometry on the bundled frames 0 to ${VO_LAST} equals the CLI view_
   fs.rmSync(broken, { recursive: true });
 });
 
+// The bundled frames 0..n as KITTI-layout sequence `seq` under `root` (sequences/SEQ/image_0),
+// with `calib` as its calib.txt and the bundled poses as poses/SEQ.txt when `poses`.
+function kittiSequence(root, seq, n, { calib, poses = true }) {
+  const dir = path.join(root, 'sequences', seq, 'image_0');
+  fs.mkdirSync(dir, { recursive: true });
+  for (let i = 0; i <= n; i++) fs.copyFileSync(FRAME(i), path.join(dir, path.basename(FRAME(i))));
+  if (calib !== undefined) fs.writeFileSync(path.join(root, 'sequences', seq, 'calib.txt'), calib);
+  if (poses) {
+    fs.mkdirSync(path.join(root, 'poses'), { recursive: true });
+    fs.copyFileSync(path.join(ROOT, DATASET, 'poses/00.txt'), path.join(root, 'poses', `${seq}.txt`));
+  }
+}
+
+// Sequences short enough for every engine: the odometry runs frames 0–VO_SEQ.
+const VO_SEQ = Math.min(VO_LAST, 20);
+
+test(`a KITTI-layout folder: sequence choice, its camera from calib.txt, odometry 0-${VO_SEQ} equal to the CLI's -s 03`, async () => {
+  const calib03 = fs.readFileSync(path.join(ROOT, 'tests/fixtures/vo_kitti03/calib.txt'), 'utf8');
+  const root = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-kitti-'));
+  const ds = path.join(root, 'dataset');
+  kittiSequence(ds, '03', VO_SEQ, { calib: calib03 });
+  kittiSequence(ds, '04', 2, {});                                   // no calib.txt
+  kittiSequence(ds, '05', 3, { calib: calib03 });                   // frame 2 of another size
+  fs.writeFileSync(path.join(ds, 'sequences/05/image_0/000002.png'), pngDeclaring(1226, 370));
+  kittiSequence(ds, '06', 3, { calib: calib03, poses: false });     // no ground truth
+  await page.goto(`${BASE}?lanes=${LANES}&algo=nndr&t=0.8&feature=42`);
+  await idle();
+  assert.match(await page.textContent(tid('camera')), /^Sequence 00 \(the lab's MyKITTI layout\) · camera fx = fy = 718\.856, cx = 607\.1928, cy = 185\.2157 the lab's/);
+  await page.setInputFiles(tid('folder'), ds);
+  // No sequence 00 here: the folder opens on its first, 03, with 03's camera.
+  await page.waitForFunction((sel) => /from sequences\/03\/calib\.txt/.test(document.querySelector(sel)?.textContent || ''), tid('camera'), { timeout: 60000 });
+  assert.equal(await page.textContent(tid('camera')), "Sequence 03 (KITTI's odometry layout) · camera fx = fy = 721.5377, cx = 609.5593, cy = 172.854 from sequences/03/calib.txt");
+  await idle();
+  const cliK = (args, cwd = ROOT) => execFileSync(CLI, ['--opencv-lanes', String(LANES), '-d', ds, ...args], { cwd, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+  const ret = cliK(['-s', '03', 'get_info', '-a', 'nndr', '-t', '0.8', '1', '42']).split('\n').find((l) => l.startsWith('ret value: ')).slice(11);
+  assert.equal(await tuple(), ret);
+  assert.match(await page.textContent('.slots'), /sequences\/03\/image_0\/000001\.png/);
+  const options = await page.evalAll(`${tid('folder-sequence')} option`, (o) => o.textContent);
+  assert.deepEqual(options, [`03 · sequences/ · ${VO_SEQ + 1} frames · poses · calib.txt`, '04 · sequences/ · 3 frames · poses',
+    '05 · sequences/ · 4 frames · poses · calib.txt', '06 · sequences/ · 4 frames · no poses · calib.txt']);
+  // 04 has no calib.txt: refused with the reason, 03 stays shown and chosen.
+  await page.selectOption(tid('folder-sequence'), '1');
+  await page.waitForFunction((sel) => /has no sequences\/04\/calib\.txt/.test(document.querySelector(sel)?.textContent || ''), tid('error'));
+  assert.match(await page.textContent(tid('camera')), /^Sequence 03 /);
+  assert.equal(await page.inputValue(tid('folder-sequence')), '0');
+  assert.equal(await tuple(), ret);
+  // The odometry on 03 with its camera: the CLI's poses and window, byte for byte.
+  await page.fill(tid('vo-frame-id'), String(VO_SEQ));
+  await page.click(tid('vo-run'));
+  await page.waitForSelector(tid('vo-ate'), { timeout: 900000 });
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo03-'));
+  const out = spawnSync(CLI, ['--opencv-lanes', String(LANES), '-d', ds, '-s', '03', 'view_trajectory', String(VO_SEQ), '--save-poses', 'poses.txt'], { cwd: tmp, encoding: 'utf8' });
+  assert.equal(out.status, 0, out.stderr);
+  assert.doesNotMatch(out.stderr, /camera: /, 'the camera comes from calib.txt');
+  const poses = await page.download(() => page.click(tid('vo-poses')));
+  assert.ok(poses.bytes.equals(fs.readFileSync(path.join(tmp, 'poses.txt'))), 'poses.txt differs from the CLI -s 03');
+  const png = await page.download(() => page.click(tid('vo-download')));
+  assert.ok(png.bytes.equals(fs.readFileSync(path.join(tmp, 'trajectory.png'))), 'trajectory.png differs from the CLI -s 03');
+  // ... and not the 00 camera's run on the same frames.
+  const lab = spawnSync(CLI, ['--opencv-lanes', String(LANES), '-d', path.join(ROOT, DATASET), 'view_trajectory', String(VO_SEQ), '--save-poses', 'lab.txt'], { cwd: tmp, encoding: 'utf8' });
+  assert.equal(lab.status, 0, lab.stderr);
+  assert.ok(!poses.bytes.equals(fs.readFileSync(path.join(tmp, 'lab.txt'))), 'the camera changes the odometry');
+  await page.elementScreenshot('.loader', shot('kitti-sequence.png'));
+  // 05: frames of two sizes; 06: no poses. Each says why; the page stays usable.
+  await page.selectOption(tid('folder-sequence'), '2');
+  await page.waitForFunction((sel) => /^Sequence 05 /.test(document.querySelector(sel)?.textContent || ''), tid('camera'));
+  await idle();
+  await page.fill(tid('vo-frame-id'), '3');
+  await page.click(tid('vo-run'));
+  await page.waitForSelector(tid('vo-error'), { timeout: 60000 });
+  assert.match(await page.textContent(tid('vo-error')), /frame 2 \(sequences\/05\/image_0\/000002\.png\) is 1226x370 but frame 0 is 1241x376: every frame of a sequence must have the same size/);
+  await page.selectOption(tid('folder-sequence'), '3');
+  await page.waitForFunction((sel) => /^Sequence 06 .*no ground-truth poses$/.test(document.querySelector(sel)?.textContent || ''), tid('camera'));
+  await idle();
+  await page.fill(tid('vo-frame-id'), '3');
+  await page.click(tid('vo-run'));
+  await page.waitForFunction((sel) => /the folder has no poses\/06\.txt/.test(document.querySelector(sel)?.textContent || ''), tid('vo-error'), { timeout: 60000 });
+  await page.selectOption(tid('folder-sequence'), '0');
+  await page.waitForFunction((sel) => /^Sequence 03 /.test(document.querySelector(sel)?.textContent || ''), tid('camera'));
+  await idle();
+  assert.equal(await tuple(), ret);
+  fs.rmSync(tmp, { recursive: true });
+  fs.rmSync(root, { recursive: true });
+});
+
 test('view_feature and view_info exports equal the CLI PNGs byte for byte', async () => {
   await page.goto(`${BASE}?lanes=${LANES}&algo=dt&t=280&feature=42`);
   await idle();

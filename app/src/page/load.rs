@@ -198,6 +198,13 @@ fn SequenceChoice() -> impl IntoView {
                         "Sequence "
                         <select
                             data-testid="folder-sequence"
+                            // The shown sequence, also after a choice that could not be opened.
+                            prop:value=move || {
+                                let shown = shown();
+                                lab.folder_sequences
+                                    .with(|v| v.iter().position(|(k, _)| *k == shown))
+                                    .map_or(String::new(), |i| i.to_string())
+                            }
                             on:change=move |ev| {
                                 let i: usize = event_target_value(&ev).parse().unwrap_or(0);
                                 if let Some((key, _)) = lab.folder_sequences.with_untracked(|v| v.get(i).cloned()) {

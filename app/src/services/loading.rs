@@ -313,6 +313,12 @@ pub fn use_sequence(lab: Lab, key: SequenceLayout, frame_id: Option<u32>) {
         lab.load_error.set(Some(format!("the folder has no {}: open the folder again", key.describe())));
         return;
     };
+    // A sequence that cannot be opened leaves the shown one (and puts the
+    // choice back on it).
+    let refuse = move |message: String| {
+        lab.load_error.set(Some(message));
+        lab.sequence.update(|_| ());
+    };
     leptos::task::spawn_local(async move {
         let calib_text = match calib {
             Some(file) => match read_file(&file)
@@ -320,13 +326,13 @@ pub fn use_sequence(lab: Lab, key: SequenceLayout, frame_id: Option<u32>) {
                 .and_then(|b| String::from_utf8(b).map_err(|_| format!("{} is not a text file", key.calib_file())))
             {
                 Ok(t) => Some(t),
-                Err(e) => return lab.load_error.set(Some(format!("{}: {e}", key.calib_file()))),
+                Err(e) => return refuse(format!("{}: {e}", key.calib_file())),
             },
             None => None,
         };
         let (camera, camera_source) = match sequence_camera(&key, calib_text.as_deref()) {
             Ok(c) => c,
-            Err(e) => return lab.load_error.set(Some(e.to_string())),
+            Err(e) => return refuse(e.to_string()),
         };
         let ids: Vec<u32> = frames.keys().copied().collect();
         let info = SequenceInfo { seq: key.clone(), camera, camera_source, has_poses: poses.is_some() };
