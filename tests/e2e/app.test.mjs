@@ -557,6 +557,7 @@ test(`a KITTI-layout folder: sequence choice, its camera from calib.txt, odometr
   kittiSequence(ds, '05', 3, { calib: calib03 });                   // frame 2 of another size
   fs.writeFileSync(path.join(ds, 'sequences/05/image_0/000002.png'), pngDeclaring(1226, 370));
   kittiSequence(ds, '06', 3, { calib: calib03, poses: false });     // no ground truth
+  kittiSequence(ds, '07', 1, { calib: 'P0: 7.215377e+02 0 6.095593e+02\n' });  // a short P0 line
   await page.goto(`${BASE}?lanes=${LANES}&algo=nndr&t=0.8&feature=42`);
   await idle();
   assert.match(await page.textContent(tid('camera')), /^Sequence 00 \(the lab's MyKITTI layout\) · camera fx = fy = 718\.856, cx = 607\.1928, cy = 185\.2157 the lab's/);
@@ -571,13 +572,18 @@ test(`a KITTI-layout folder: sequence choice, its camera from calib.txt, odometr
   assert.match(await page.textContent('.slots'), /sequences\/03\/image_0\/000001\.png/);
   const options = await page.evalAll(`${tid('folder-sequence')} option`, (o) => o.textContent);
   assert.deepEqual(options, [`03 · sequences/ · ${VO_SEQ + 1} frames · poses · calib.txt`, '04 · sequences/ · 3 frames · poses',
-    '05 · sequences/ · 4 frames · poses · calib.txt', '06 · sequences/ · 4 frames · no poses · calib.txt']);
+    '05 · sequences/ · 4 frames · poses · calib.txt', '06 · sequences/ · 4 frames · no poses · calib.txt',
+    '07 · sequences/ · 2 frames · poses · calib.txt']);
   // 04 has no calib.txt: refused with the reason, 03 stays shown and chosen.
   await page.selectOption(tid('folder-sequence'), '1');
   await page.waitForFunction((sel) => /has no sequences\/04\/calib\.txt/.test(document.querySelector(sel)?.textContent || ''), tid('error'));
   assert.match(await page.textContent(tid('camera')), /^Sequence 03 /);
   assert.equal(await page.inputValue(tid('folder-sequence')), '0');
   assert.equal(await tuple(), ret);
+  await page.click(`${tid('error')} button.link`);
+  await page.selectOption(tid('folder-sequence'), '4');
+  await page.waitForFunction((sel) => /sequences\/07\/calib\.txt line 1: P0 has 3 numbers, not 12/.test(document.querySelector(sel)?.textContent || ''), tid('error'));
+  assert.equal(await page.inputValue(tid('folder-sequence')), '0');
   // The odometry on 03 with its camera: the CLI's poses and window, byte for byte.
   await page.fill(tid('vo-frame-id'), String(VO_SEQ));
   await page.click(tid('vo-run'));
