@@ -16,6 +16,11 @@
 use crate::{Error, Result};
 use std::collections::BTreeMap;
 
+/// File name of frame `i`: `%06d.png`.
+pub fn frame_name(i: usize) -> String {
+    format!("{i:06}.png")
+}
+
 /// Which of the two layouts a sequence is stored in.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Layout {
@@ -68,7 +73,7 @@ impl SequenceLayout {
 
     /// Frame `i`: `<frame_dir>/%06d.png`.
     pub fn frame_path(&self, i: usize) -> String {
-        format!("{}/{}", self.frame_dir(), super::frame_name(i))
+        format!("{}/{}", self.frame_dir(), frame_name(i))
     }
 
     /// `poses/NN.txt` (both layouts).

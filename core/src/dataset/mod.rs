@@ -12,21 +12,14 @@ pub mod layout;
 pub mod poses;
 
 pub use calib::{describe_camera, parse_calib};
-pub use layout::{parse_sequence, scan_paths, Layout, SequenceFiles, SequenceLayout};
-pub use poses::{dist3, gt_scale, parse_poses, parse_poses_in, position, PoseRow};
+pub use layout::{frame_name, parse_sequence, scan_paths, Layout, SequenceFiles, SequenceLayout};
+pub use poses::{dist3, gt_scale, parse_poses, parse_poses_in, position, PoseRow, POSES_FILE};
 
 use crate::camera::Camera;
 use crate::{Error, Result};
 
 /// Folder of the lab's frames (sequence 00, MyKITTI layout), relative to the dataset root.
 pub const FRAME_DIR: &str = "gray/00/image_0";
-/// The lab's ground-truth poses, relative to the dataset root.
-pub const POSES_FILE: &str = "poses/00.txt";
-
-/// File name of frame `i`: `%06d.png`.
-pub fn frame_name(i: usize) -> String {
-    format!("{i:06}.png")
-}
 
 /// Path of the lab's frame `i` relative to the dataset root (`gray/00/image_0/%06d.png`).
 pub fn frame_relative_path(i: usize) -> String {

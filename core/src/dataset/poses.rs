@@ -3,6 +3,9 @@
 
 use crate::{Error, Result};
 
+/// The lab's ground-truth poses (sequence 00), relative to the dataset root.
+pub const POSES_FILE: &str = "poses/00.txt";
+
 /// A KITTI pose line: the 3×4 matrix [R|t], row-major.
 pub type PoseRow = [f64; 12];
 
@@ -14,7 +17,7 @@ pub fn position(p: &PoseRow) -> [f64; 3] {
 /// Parses KITTI pose text: 12 numbers per non-empty line, separated by
 /// whitespace. Errors name the line (1-based) and what is wrong with it.
 pub fn parse_poses(text: &str) -> Result<Vec<PoseRow>> {
-    parse_poses_in(text, super::POSES_FILE)
+    parse_poses_in(text, POSES_FILE)
 }
 
 /// [`parse_poses`] for the file `file` (`poses/03.txt`), named in errors.
