@@ -19,7 +19,7 @@ use siftlab_app::protocol::sift::{SiftReply, SiftRequest, SiftResult};
 use siftlab_app::protocol::{is_ready, ready_js, Request};
 use siftlab_core::matching::StrategyKind;
 use siftlab_core::sift::{Features, KeyPoint};
-use siftlab_core::vo::StepDetail;
+use siftlab_core::vo::{Camera, StepDetail};
 use std::sync::Arc;
 use wasm_bindgen::JsCast;
 use wasm_bindgen_test::*;
@@ -418,12 +418,20 @@ fn worker_messages_round_trip_bit_for_bit() {
 
 #[wasm_bindgen_test]
 fn odometry_messages_round_trip_and_bad_poses_are_named() {
-    let v = VoRequest::Start { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into() };
-    assert_eq!(Request::from_js(&v.to_js()).unwrap(), Request::Odometry(v));
+    // Sequence 03's camera travels with the run.
+    let camera = Camera { fx: 721.5377, fy: 721.5377, cx: 609.5593, cy: 172.854 };
+    let v = VoRequest::Start { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into(), camera };
+    assert_eq!(Request::from_js(&v.to_js()).unwrap(), Request::Odometry(v.clone()));
     for threshold in [Some(0.8), None] {
-        let v = VoRequest::MatchedStart { id: 5, total: 2, poses: "p".into(), algo: "nndr".into(), threshold };
+        let v = VoRequest::MatchedStart { id: 5, total: 2, poses: "p".into(), camera, algo: "nndr".into(), threshold };
         assert_eq!(Request::from_js(&v.to_js()).unwrap(), Request::Odometry(v));
     }
+    // A camera that cannot be one is refused when the message is read.
+    let js = v.to_js();
+    let bad = js_sys::Float64Array::from([0.0, 721.5377, 609.5593, 172.854].as_slice());
+    js_sys::Reflect::set(&js, &"camera".into(), &bad).unwrap();
+    let e = Request::from_js(&js).unwrap_err();
+    assert!(e.starts_with("message field camera: invalid camera intrinsics fx=0"), "{e}");
     for m in [
         VoReply::Step {
             id: 5,
@@ -464,7 +472,7 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
     // Malformed poses and too few poses fail before any SIFT runs, with the file named.
     let got = run(vec![vec![0; 4]; 2], "1 0 0 0\n");
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
-    assert!(message.starts_with("poses/00.txt"), "{message}");
+    assert!(message.starts_with("the poses file line 1"), "{message}");
     let got = run(vec![vec![0; 4]; 3], "1 0 0 0 0 1 0 0 0 0 1 0\n1 0 0 0 0 1 0 0 0 0 1 1\n");
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("2 poses but 3 frames"), "{message}");
@@ -482,7 +490,10 @@ fn one_worker_odometry(id: u32, frames: Vec<Vec<u8>>, poses: &str) -> Vec<VoRepl
     let post = |m: VoReply| got.borrow_mut().push(m);
     let failed = |got: &std::cell::RefCell<Vec<VoReply>>| matches!(got.borrow().last(), Some(VoReply::Failed { .. }));
     let total = frames.len() as u32;
-    siftlab_app::worker::odometry::handle(VoRequest::Start { id, total, poses: poses.into() }, &post);
+    siftlab_app::worker::odometry::handle(
+        VoRequest::Start { id, total, poses: poses.into(), camera: Camera::default() },
+        &post,
+    );
     for (i, bytes) in frames.into_iter().enumerate() {
         if failed(&got) {
             break;
@@ -532,7 +543,7 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     assert!(matches!(one_worker[4], VoReply::Metrics { metrics, .. } if metrics[0] == 4.0));
     assert!(matches!(one_worker[5], VoReply::Done { .. }));
 
-    assert!(handle(VoRequest::Start { id: 7, total: 4, poses: poses.into() }).is_empty());
+    assert!(handle(VoRequest::Start { id: 7, total: 4, poses: poses.into(), camera: Camera::default() }).is_empty());
     // Each frame's SIFT as the page's SIFT workers compute it (no gray image),
     // through the postMessage encoding.
     let features: Vec<Features> = frames
@@ -566,7 +577,7 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     assert_eq!(streamed, one_worker);
 
     // A frame out of turn ends the run with a message, and later frames are refused.
-    assert!(handle(VoRequest::Start { id: 8, total: 4, poses: poses.into() }).is_empty());
+    assert!(handle(VoRequest::Start { id: 8, total: 4, poses: poses.into(), camera: Camera::default() }).is_empty());
     let got = handle(VoRequest::Frame { id: 8, frame: 2, bytes: frames[2].clone(), points: None });
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("out of order"), "{message}");
@@ -574,15 +585,21 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("no odometry run"), "{message}");
     // An LK run refuses features without the image.
-    assert!(handle(VoRequest::Start { id: 9, total: 4, poses: poses.into() }).is_empty());
+    assert!(handle(VoRequest::Start { id: 9, total: 4, poses: poses.into(), camera: Camera::default() }).is_empty());
     let got = handle(VoRequest::Features { id: 9, frame: 0, features: features[0].clone() });
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("needs the image"), "{message}");
 
     // A matcher-driven run fed the shared features (`VoFeatures`) gives what
     // the same run computing SIFT itself from the images gives.
-    let start =
-        |id| VoRequest::MatchedStart { id, total: 4, poses: poses.into(), algo: "nndr".into(), threshold: Some(0.8) };
+    let start = |id| VoRequest::MatchedStart {
+        id,
+        total: 4,
+        poses: poses.into(),
+        camera: Camera::default(),
+        algo: "nndr".into(),
+        threshold: Some(0.8),
+    };
     let mut own = Vec::new();
     assert!(handle(start(10)).is_empty());
     for (i, bytes) in frames.iter().enumerate() {

@@ -419,6 +419,17 @@ pub async fn vo_inputs(source: &Source, n: u32) -> Result<VoInputs, String> {
         Source::Files => return Err("the odometry needs the demo or a MyKITTI folder (frames 0, 1, 2, …)".into()),
     };
     check_same_size(&frames, &seq).map_err(|e| e.to_string())?;
+    // The poses are read here, where the file's name is known, so that a
+    // malformed or short file is named (the workers only see its text).
+    let file = seq.poses_file();
+    let rows = siftlab_core::dataset::parse_poses_in(&poses, &file).map_err(|e| e.to_string())?;
+    if rows.len() < n as usize {
+        return Err(format!(
+            "{file} has {} poses but the odometry needs {n} (frames 0 … {}): the lab takes each frame's scale from them",
+            rows.len(),
+            n - 1
+        ));
+    }
     Ok(VoInputs { frames, poses, camera })
 }
 
