@@ -561,9 +561,18 @@ test(`a KITTI-layout folder: sequence choice, its camera from calib.txt, odometr
   await page.goto(`${BASE}?lanes=${LANES}&algo=nndr&t=0.8&feature=42`);
   await idle();
   assert.match(await page.textContent(tid('camera')), /^Sequence 00 \(the lab's MyKITTI layout\) · camera fx = fy = 718\.856, cx = 607\.1928, cy = 185\.2157 the lab's/);
+  // Sequence 08 in the lab's layout, without calib.txt: the lab's 00 camera, with a warning.
+  fs.mkdirSync(path.join(ds, 'gray/08/image_0'), { recursive: true });
+  for (let i = 0; i <= 1; i++) fs.copyFileSync(FRAME(i), path.join(ds, 'gray/08/image_0', path.basename(FRAME(i))));
   await page.setInputFiles(tid('folder'), ds);
-  // No sequence 00 here: the folder opens on its first, 03, with 03's camera.
+  // No sequence 00 here: the folder opens on its first, the lab layout's 08.
+  await page.waitForFunction((sel) => /^Sequence 08 /.test(document.querySelector(sel)?.textContent || ''), tid('camera'), { timeout: 60000 });
+  assert.match(await page.textContent(tid('camera-warning')), /^warning: gray\/08\/image_0 has no calib\.txt, so sequence 08's odometry uses the lab's sequence-00 camera \(fx = fy = 718\.856/);
+  await idle();
+  await page.elementScreenshot('.loader', shot('lab-sequence-08.png'));
+  await page.selectOption(tid('folder-sequence'), '1');
   await page.waitForFunction((sel) => /from sequences\/03\/calib\.txt/.test(document.querySelector(sel)?.textContent || ''), tid('camera'), { timeout: 60000 });
+  assert.ok(await page.evaluate((sel) => document.querySelector(sel) === null, tid('camera-warning')), 'no warning with a calib.txt');
   assert.equal(await page.textContent(tid('camera')), "Sequence 03 (KITTI's odometry layout) · camera fx = fy = 721.5377, cx = 609.5593, cy = 172.854 from sequences/03/calib.txt");
   await idle();
   const cliK = (args, cwd = ROOT) => execFileSync(CLI, ['--opencv-lanes', String(LANES), '-d', ds, ...args], { cwd, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
@@ -571,19 +580,19 @@ test(`a KITTI-layout folder: sequence choice, its camera from calib.txt, odometr
   assert.equal(await tuple(), ret);
   assert.match(await page.textContent('.slots'), /sequences\/03\/image_0\/000001\.png/);
   const options = await page.evalAll(`${tid('folder-sequence')} option`, (o) => o.textContent);
-  assert.deepEqual(options, [`03 · sequences/ · ${VO_SEQ + 1} frames · poses · calib.txt`, '04 · sequences/ · 3 frames · poses',
+  assert.deepEqual(options, ['08 · gray/ · 2 frames · no poses', `03 · sequences/ · ${VO_SEQ + 1} frames · poses · calib.txt`, '04 · sequences/ · 3 frames · poses',
     '05 · sequences/ · 4 frames · poses · calib.txt', '06 · sequences/ · 4 frames · no poses · calib.txt',
     '07 · sequences/ · 2 frames · poses · calib.txt']);
   // 04 has no calib.txt: refused with the reason, 03 stays shown and chosen.
-  await page.selectOption(tid('folder-sequence'), '1');
+  await page.selectOption(tid('folder-sequence'), '2');
   await page.waitForFunction((sel) => /has no sequences\/04\/calib\.txt/.test(document.querySelector(sel)?.textContent || ''), tid('error'));
   assert.match(await page.textContent(tid('camera')), /^Sequence 03 /);
-  assert.equal(await page.inputValue(tid('folder-sequence')), '0');
+  assert.equal(await page.inputValue(tid('folder-sequence')), '1');
   assert.equal(await tuple(), ret);
   await page.click(`${tid('error')} button.link`);
-  await page.selectOption(tid('folder-sequence'), '4');
+  await page.selectOption(tid('folder-sequence'), '5');
   await page.waitForFunction((sel) => /sequences\/07\/calib\.txt line 1: P0 has 3 numbers, not 12/.test(document.querySelector(sel)?.textContent || ''), tid('error'));
-  assert.equal(await page.inputValue(tid('folder-sequence')), '0');
+  assert.equal(await page.inputValue(tid('folder-sequence')), '1');
   // The odometry on 03 with its camera: the CLI's poses and window, byte for byte.
   await page.fill(tid('vo-frame-id'), String(VO_SEQ));
   await page.click(tid('vo-run'));
@@ -602,20 +611,20 @@ test(`a KITTI-layout folder: sequence choice, its camera from calib.txt, odometr
   assert.ok(!poses.bytes.equals(fs.readFileSync(path.join(tmp, 'lab.txt'))), 'the camera changes the odometry');
   await page.elementScreenshot('.loader', shot('kitti-sequence.png'));
   // 05: frames of two sizes; 06: no poses. Each says why; the page stays usable.
-  await page.selectOption(tid('folder-sequence'), '2');
+  await page.selectOption(tid('folder-sequence'), '3');
   await page.waitForFunction((sel) => /^Sequence 05 /.test(document.querySelector(sel)?.textContent || ''), tid('camera'));
   await idle();
   await page.fill(tid('vo-frame-id'), '3');
   await page.click(tid('vo-run'));
   await page.waitForSelector(tid('vo-error'), { timeout: 60000 });
   assert.match(await page.textContent(tid('vo-error')), /frame 2 \(sequences\/05\/image_0\/000002\.png\) is 1226x370 but frame 0 is 1241x376: every frame of a sequence must have the same size/);
-  await page.selectOption(tid('folder-sequence'), '3');
+  await page.selectOption(tid('folder-sequence'), '4');
   await page.waitForFunction((sel) => /^Sequence 06 .*no ground-truth poses$/.test(document.querySelector(sel)?.textContent || ''), tid('camera'));
   await idle();
   await page.fill(tid('vo-frame-id'), '3');
   await page.click(tid('vo-run'));
   await page.waitForFunction((sel) => /the folder has no poses\/06\.txt/.test(document.querySelector(sel)?.textContent || ''), tid('vo-error'), { timeout: 60000 });
-  await page.selectOption(tid('folder-sequence'), '0');
+  await page.selectOption(tid('folder-sequence'), '1');
   await page.waitForFunction((sel) => /^Sequence 03 /.test(document.querySelector(sel)?.textContent || ''), tid('camera'));
   await idle();
   assert.equal(await tuple(), ret);
