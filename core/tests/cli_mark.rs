@@ -301,7 +301,7 @@ fn what_cannot_be_marked_exits_2() {
         .output()
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
-    assert!(stderr(&o).contains("dataset folder /no/such/MyKITTI not found"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("dataset folder /no/such/MyKITTI does not exist"), "{}", stderr(&o));
     assert!(!stderr(&o).contains("panicked"));
 }
 
