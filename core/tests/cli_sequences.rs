@@ -180,6 +180,35 @@ fn another_camera_equals_opencv_with_that_camera() {
         .fold((0.0, 0), |a, b| if b.0 > a.0 { b } else { a });
     assert!(worst <= 1e-6, "frame {frame}: {worst} m from OpenCV with sequence 03's camera");
     assert_eq!(fs::read_to_string(&trace).unwrap(), fixture("trace.jsonl"));
+    // The epipolar judge sees through the same camera: the same matches, other Sampson distances.
+    let judge = |args: &[&str]| {
+        let o = siftlab_in(&root, args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        stdout(&o)
+    };
+    let (d03, dlab) = (ds.to_str().unwrap(), lab_dataset());
+    let with03 =
+        judge(&["--opencv-lanes", "8", "-d", d03, "-s", "03", "match_all", "-a", "nndr", "-t", "0.8", "--json", "120"]);
+    let with00 = judge(&[
+        "--opencv-lanes",
+        "8",
+        "-d",
+        dlab.to_str().unwrap(),
+        "match_all",
+        "-a",
+        "nndr",
+        "-t",
+        "0.8",
+        "--json",
+        "120",
+    ]);
+    let field = |s: &str, key: &str| -> Vec<String> {
+        s.split(&format!("\"{key}\": ")).skip(1).map(|r| r.split([',', '}']).next().unwrap().to_string()).collect()
+    };
+    assert_eq!(field(&with03, "query"), field(&with00, "query"));
+    assert_eq!(field(&with03, "distance"), field(&with00, "distance"));
+    let (s03, s00) = (field(&with03, "sampson"), field(&with00, "sampson"));
+    assert!(s03.len() > 700 && s03.iter().zip(&s00).filter(|(a, b)| a != b).count() > s03.len() / 2, "{s03:?}");
     // The camera matters: the 00 camera's run (tests/fixtures/vo_lk) ends metres away.
     let lab = positions(&fs::read_to_string(repo_root().join("tests/fixtures/vo_lk/poses.txt")).unwrap());
     assert!(dist(&got[150], &lab[150]) > 1.0, "{:?} vs {:?}", got[150], lab[150]);
