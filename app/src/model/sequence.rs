@@ -2,7 +2,7 @@
 //! picked folder's, in the lab's layout or KITTI's), its camera, and how the
 //! loader names them. Plain functions, tested natively.
 
-use siftlab_core::dataset::{camera_note, describe_camera, CameraSource, Layout, SequenceFiles, SequenceLayout};
+use siftlab_core::dataset::{camera_note, describe_camera, CameraSource, SequenceFiles, SequenceLayout};
 use siftlab_core::vo::Camera;
 
 /// The sequence being shown and the camera its odometry and epipolar judge use.
@@ -49,11 +49,8 @@ impl SequenceInfo {
 
 /// The folder's sequence choice: `03 · sequences/ · 151 frames · poses · calib.txt`.
 pub fn sequence_option(key: &SequenceLayout, files: &SequenceFiles) -> String {
-    let dir = match key.layout {
-        Layout::Lab => "gray/",
-        Layout::Kitti => "sequences/",
-    };
-    let mut parts = vec![format!("{} · {dir}", key.sequence), format!("{} frames", files.frames.len())];
+    let dir = key.layout.sequences_dir();
+    let mut parts = vec![format!("{} · {dir}/", key.sequence), format!("{} frames", files.frames.len())];
     parts.push(if files.poses.is_some() { "poses".into() } else { "no poses".into() });
     if files.calib.is_some() {
         parts.push("calib.txt".into());
@@ -77,6 +74,7 @@ pub fn default_sequence<'a>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use siftlab_core::dataset::Layout;
 
     #[test]
     fn the_camera_line_says_where_the_camera_comes_from() {

@@ -190,16 +190,8 @@ pub fn pick_layout(sequence: &str, lab_exists: bool, kitti_exists: bool) -> Opti
 /// `00 (lab layout), 03 (KITTI layout)`: the sequences a folder has, for
 /// the message that says the asked one is not there.
 pub fn describe_sequences<'a>(seqs: impl IntoIterator<Item = &'a SequenceLayout>) -> String {
-    let names: Vec<String> = seqs
-        .into_iter()
-        .map(|s| {
-            let l = match s.layout {
-                Layout::Lab => "gray/",
-                Layout::Kitti => "sequences/",
-            };
-            format!("{} (in {l})", s.sequence)
-        })
-        .collect();
+    let names: Vec<String> =
+        seqs.into_iter().map(|s| format!("{} (in {}/)", s.sequence, s.layout.sequences_dir())).collect();
     if names.is_empty() {
         "none".into()
     } else {

@@ -18,14 +18,6 @@ pub use poses::{dist3, gt_scale, parse_poses, parse_poses_in, position, PoseRow,
 use crate::camera::Camera;
 use crate::{Error, Result};
 
-/// Folder of the lab's frames (sequence 00, MyKITTI layout), relative to the dataset root.
-pub const FRAME_DIR: &str = "gray/00/image_0";
-
-/// Path of the lab's frame `i` relative to the dataset root (`gray/00/image_0/%06d.png`).
-pub fn frame_relative_path(i: usize) -> String {
-    format!("{FRAME_DIR}/{}", frame_name(i))
-}
-
 /// Where a sequence's camera comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum CameraSource {
@@ -370,7 +362,7 @@ mod tests {
             "{e}"
         );
         assert!(e.ends_with("sequences there: none (choose one with -s)"), "{e}");
-        std::fs::create_dir_all(dir.join(FRAME_DIR)).unwrap();
+        std::fs::create_dir_all(dir.join(SequenceLayout::lab().frame_dir())).unwrap();
         assert_eq!(Dataset::open(&dir).unwrap().frame_count(), 0);
         put(&dir, "gray/00/image_0/000000.png", &png(8, 6));
         put(&dir, "gray/00/image_0/000001.png", b"not a png");
