@@ -6,11 +6,35 @@ one JSON line (a knn request) and returning one JSON line (the answer), then cal
 `handle(line) -> line` per request. When host_knn is unset and a `siftlab_knn` function is
 on the JavaScript global scope, that one is used.
 
-Command line (CPython): `python3 siftlab_harness.py` reads requests from stdin, one JSON
-line each, and writes each reply as one line on stdout; while the student's code runs,
-each knn request is written to stdout and its answer read from stdin. What the student's
-code prints is captured (the reply's "output"), never written to the protocol's stdout.
+Command line (CPython): `python3 -I -S -B siftlab_harness.py [--path DIR]... [--drop-uid N]`
+reads requests from stdin, one JSON line each, and writes each reply as one line on stdout;
+while the student's code runs, each knn request is written to stdout and its answer read from
+stdin. At start the protocol moves to private descriptors and fds 0 and 1 become /dev/null,
+so nothing the student's code writes can reach the protocol's stdout. `--drop-uid N` (the
+sandbox as root) sets the uid and gid to N before any other work; `--path DIR` puts DIR
+(numpy's parent folder) on sys.path.
+
+The harness judges nothing: it never sees the expected values. It returns what the
+student's functions returned, encoded by type (docs/marking.md, "Typed values"), and siftlab
+compares outside this interpreter.
 """
+
+import os
+import sys
+
+if __name__ == "__main__":
+    # Before anything else: leave root (the sandbox's real uid) for the marking uid, and
+    # put numpy's folder on the path (-I -S gives the standard library only).
+    _argv = sys.argv[1:]
+    while _argv:
+        _flag = _argv.pop(0)
+        if _flag == "--drop-uid":
+            _uid = int(_argv.pop(0))
+            os.setgroups([])
+            os.setgid(_uid)
+            os.setuid(_uid)
+        elif _flag == "--path":
+            sys.path.append(_argv.pop(0))
 
 import base64
 import builtins
@@ -21,10 +45,10 @@ import json
 import linecache
 import math
 import operator
-import os
-import sys
+import threading
 import traceback
 import types
+import array
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 STUDENT_FILE = "vision_tasks.py"
@@ -79,6 +103,11 @@ cv2._host = _host_bridge
 
 
 # --- what the student's file may import ----------------------------------------------------
+# The lab's rule (for fidelity; the sandbox is what keeps a file in): the standard library,
+# cv2, numpy and vision_tasks_base. Checked on every route in: `import` and `__import__`
+# (builtins, also for exec with the real builtins), importlib.import_module and
+# importlib.__import__, and every module built from a spec (importlib.util's file loading
+# included), by name and by the file it comes from.
 
 _LAB_MODULES = {"cv2", "numpy", "vision_tasks_base"}
 
@@ -103,27 +132,103 @@ def _is_stdlib(top):
         return False
     if spec is None or spec.origin is None:
         return False
+    return _origin_allowed(spec.origin)
+
+
+def _allowed_roots():
+    import sysconfig
     paths = sysconfig.get_paths()
-    roots = [os.path.realpath(paths[k]) for k in ("stdlib", "platstdlib") if k in paths]
-    origin = os.path.realpath(spec.origin)
-    return any(origin.startswith(r + os.sep) and "site-packages" not in origin for r in roots)
+    roots = {os.path.realpath(paths[k]) for k in ("stdlib", "platstdlib") if k in paths}
+    roots.update(os.path.realpath(p) for p in sys.path if p.endswith(".zip"))
+    roots.add(os.path.realpath(HERE))
+    return tuple(r + os.sep for r in roots)
+
+
+_PACKAGE_DIRS = ("site-packages", "dist-packages")
+
+
+def _origin_allowed(origin):
+    """A module's file is the standard library's (not a package installed beside it),
+    numpy's, or one of our shims."""
+    if not isinstance(origin, str) or not os.path.isabs(origin):
+        return True  # built-in, frozen, namespace
+    path = os.path.realpath(origin)
+    np = cv2._np
+    if np is not None and path.startswith(os.path.dirname(os.path.realpath(np.__file__)) + os.sep):
+        return True
+    parts = path.split(os.sep)
+    return path.startswith(_ROOTS) and not any(d in parts for d in _PACKAGE_DIRS)
+
+
+def _name_allowed(name):
+    top = name.partition(".")[0]
+    return top in _LAB_MODULES or _is_stdlib(top)
+
+
+def _refuse(name):
+    top = name.partition(".")[0]
+    raise ModuleNotFoundError(
+        "No module named '%s': the lab's machines have only Python's standard library, "
+        "cv2 (OpenCV) and numpy" % top, name=top)
+
+
+_MAIN_THREAD = threading.get_ident()
+_in_student = False
+
+
+def _gated():
+    """The rule holds while the student's code runs, and in any thread it started."""
+    return _in_student or threading.get_ident() != _MAIN_THREAD
 
 
 _real_import = builtins.__import__
+_bootstrap = importlib._bootstrap
+_real_gcd_import = _bootstrap._gcd_import
+_real_bootstrap_import = _bootstrap.__import__
+_real_module_from_spec = _bootstrap.module_from_spec
 
 
 def _guarded_import(name, globals=None, locals=None, fromlist=(), level=0):
-    if level == 0:
-        top = name.partition(".")[0]
-        if top not in _LAB_MODULES and not _is_stdlib(top):
-            raise ModuleNotFoundError(
-                "No module named '%s': the lab's machines have only Python's standard library, "
-                "cv2 (OpenCV) and numpy" % top, name=top)
+    if level == 0 and _gated() and not _name_allowed(name):
+        _refuse(name)
     return _real_import(name, globals, locals, fromlist, level)
 
 
-_student_builtins = dict(builtins.__dict__)
-_student_builtins["__import__"] = _guarded_import
+def _guarded_gcd_import(name, package=None, level=0):
+    if level == 0 and _gated() and not _name_allowed(name):
+        _refuse(name)
+    return _real_gcd_import(name, package, level)
+
+
+def _guarded_bootstrap_import(name, globals=None, locals=None, fromlist=(), level=0):
+    if level == 0 and _gated() and not _name_allowed(name):
+        _refuse(name)
+    return _real_bootstrap_import(name, globals, locals, fromlist, level)
+
+
+def _guarded_module_from_spec(spec):
+    if _gated():
+        name = getattr(spec, "name", "") or "?"
+        if not _name_allowed(name):
+            _refuse(name)
+        origin = getattr(spec, "origin", None)
+        if not _origin_allowed(origin):
+            raise ModuleNotFoundError(
+                "%s is not a module of Python's standard library, cv2 or numpy: the lab's machines "
+                "have only those" % (origin,), name=name)
+    return _real_module_from_spec(spec)
+
+
+# Computed before the gate is in place (it imports sysconfig).
+_ROOTS = _allowed_roots()
+builtins.__import__ = _guarded_import
+_bootstrap._gcd_import = _guarded_gcd_import
+_bootstrap.__import__ = _guarded_bootstrap_import
+importlib.__import__ = _guarded_bootstrap_import
+_bootstrap.module_from_spec = _guarded_module_from_spec
+importlib.util.module_from_spec = _guarded_module_from_spec
+
+_student_builtins = builtins.__dict__
 
 
 # --- state ---------------------------------------------------------------------------------
@@ -225,6 +330,8 @@ def _run(fn, args):
     # the collector's passes over them would cost more than the rest of the call.
     gc_was_on = gc.isenabled()
     gc.disable()
+    global _in_student
+    _in_student = True
     try:
         value = fn(*args)
     except KeyboardInterrupt:
@@ -235,6 +342,7 @@ def _run(fn, args):
         _add_output(reply, buf)
         raise _Failure(reply, e) from None
     finally:
+        _in_student = False
         sys.stdout, sys.stderr, sys.stdin = saved
         if gc_was_on:
             gc.enable()
@@ -310,7 +418,6 @@ def _check_matches(fn, value, compact=False):
     DM = cv2.DMatch
     ours = {DM, cv2._Match}
     if compact:
-        import array
         n, q, t, d = [], array.array("i"), array.array("i"), array.array("f")
         gq, gt, gd = operator.attrgetter("_q"), operator.attrgetter("_t"), operator.attrgetter("_d")
     else:
@@ -359,35 +466,76 @@ def _dumps(obj):
         return json.dumps(_finite(obj), allow_nan=False, separators=(",", ":"))
 
 
-def _to_json(v, depth=0):
-    """A returned value as JSON: tuples and lists as arrays, numpy scalars and arrays as
-    numbers and arrays, anything else as its repr."""
-    if depth > 20:
-        return repr(v)
-    if v is None or isinstance(v, (bool, str)):
-        return v
-    if isinstance(v, int):
-        return int(v)
-    if isinstance(v, float):
-        return float(v)
+# --- typed values (docs/marking.md, "Typed values") -----------------------------------------
+# matching_info's value goes to siftlab by type, and siftlab applies Python's == outside this
+# interpreter. Every conversion below is the base type's own (int.__int__, float.__float__,
+# tuple.__iter__, ...), so no method of the student's classes runs: a subclass is its base
+# value, tagged with its class name.
+
+MAX_DEPTH = 32
+MAX_NODES = 100000
+
+
+def _np_types():
     np = cv2._np
-    if np is not None:
-        if isinstance(v, np.generic):
-            return _to_json(v.item(), depth + 1)
-        if isinstance(v, np.ndarray):
-            return _to_json(v.tolist(), depth + 1)
-    if isinstance(v, (list, tuple)):
-        return [_to_json(x, depth + 1) for x in v]
+    if np is None:
+        return None, None
+    return np.generic, np.ndarray
+
+
+_NP_GENERIC, _NP_NDARRAY = _np_types()
+
+
+def _sub(t, base, out):
+    if t is not base:
+        out["sub"] = str.__str__(t.__name__) if isinstance(t.__name__, str) else "?"
+    return out
+
+
+def _enc(v, depth, budget):
+    budget[0] -= 1
+    t = type(v)
+    if budget[0] < 0:
+        return {"opaque": t.__name__, "why": "over %d items" % MAX_NODES}
+    if depth > MAX_DEPTH:
+        return {"opaque": t.__name__, "why": "nested over %d levels" % MAX_DEPTH}
+    if v is None:
+        return None
+    if t is bool:
+        return v is True
+    if issubclass(t, int):
+        i = int.__int__(v)
+        if t is not int:
+            return _sub(t, int, {"int": str(i)})
+        return i if -(1 << 63) <= i < (1 << 63) else {"int": str(i)}
+    if issubclass(t, float):
+        f = float.__float__(v)
+        if t is float and math.isfinite(f):
+            return f
+        return _sub(t, float, {"float": f if math.isfinite(f) else ("nan" if f != f else ("inf" if f > 0 else "-inf"))})
+    if issubclass(t, str):
+        x = str.__str__(v)
+        return x if t is str else _sub(t, str, {"str": x})
+    if issubclass(t, tuple):
+        return _sub(t, tuple, {"tuple": [_enc(x, depth + 1, budget) for x in tuple.__iter__(v)]})
+    if issubclass(t, list):
+        return _sub(t, list, {"list": [_enc(x, depth + 1, budget) for x in list(list.__iter__(v))]})
+    if _NP_GENERIC is not None and issubclass(t, _NP_GENERIC):
+        # A numpy scalar is its Python value (np.float32 widens exactly), as == sees it.
+        x = _NP_GENERIC.item(v)
+        if type(x) in (bool, int, float, str):
+            return _sub(t, t, {"np": t.__name__, "value": _enc(x, depth + 1, budget)})
+        return {"opaque": t.__name__}
+    if _NP_NDARRAY is not None and issubclass(t, _NP_NDARRAY):
+        return {"opaque": "ndarray", "shape": [int(n) for n in _NP_NDARRAY.__getattribute__(v, "shape")]}
+    return {"opaque": t.__name__ if isinstance(t.__name__, str) else "?"}
+
+
+def _typed(v):
     try:
-        return repr(v)
-    except Exception:
-        return "<%s>" % _tname(v)
-
-
-def _expected_info(e):
-    """The reference's ((x, y), [(x, y), ...], [d, ...]) from its JSON."""
-    (x, y), pts, ds = e
-    return ((x, y), [(a, b) for a, b in pts], [float(d) for d in ds])
+        return _enc(v, 0, [MAX_NODES])
+    except Exception as e:  # a class whose layout lies about its base
+        return {"opaque": "?", "why": "%s: %s" % (type(e).__name__, e)}
 
 
 def _call(msg):
@@ -434,17 +582,7 @@ def _call(msg):
             if type(part) is not want:
                 return _add_output({"error": "matching_info: %s must be a %s, got %s"
                                     % (what, want.__name__, _tname(part)), "kind": "type"}, buf)
-        reply = {"ok": _to_json((a, b, c))}
-        try:
-            reply["repr"] = repr(value)
-        except Exception as e:
-            reply["repr"] = "<repr failed: %s>" % e
-        if "expected" in msg:
-            try:
-                reply["equal"] = bool((a, b, c) == _expected_info(msg["expected"]))
-            except Exception:
-                reply["equal"] = False
-        return _add_output(reply, buf)
+        return _add_output({"ok": _typed((a, b, c))}, buf)
     return {"error": "unknown fn %r" % (fn,), "kind": "protocol"}
 
 
@@ -470,6 +608,7 @@ _OPS = {"load": _load, "pair": _pair, "call": _call, "hello": _hello, "drop": _d
 
 def handle(line):
     """One request line -> one reply line (docs/marking.md)."""
+    msg = None
     try:
         msg = json.loads(line)
         op = _OPS.get(msg.get("op")) if isinstance(msg, dict) else None
@@ -479,15 +618,24 @@ def handle(line):
             reply = op(msg)
     except KeyboardInterrupt:
         raise
-    except Exception as e:  # a malformed request, or a fault of ours
+    except BaseException as e:  # a malformed request, or a fault of ours
         reply = {"error": "%s: %s" % (type(e).__name__, e), "kind": "protocol"}
+    if isinstance(msg, dict) and "req" in msg:
+        reply["req"] = msg["req"]
     return _dumps(reply)
 
 
 def main():
     global host_knn
-    inp = sys.stdin.buffer
-    out = sys.stdout.buffer
+    # The protocol on descriptors of its own; fds 0 and 1 become /dev/null, so the student's
+    # raw writes (os.write(1, ...), sys.__stdout__) never reach siftlab's reader.
+    inp = os.fdopen(os.dup(0), "rb")
+    out = os.fdopen(os.dup(1), "wb")
+    null = os.open(os.devnull, os.O_RDWR)
+    os.dup2(null, 0)
+    os.dup2(null, 1)
+    sys.stdin = io.StringIO("")
+    sys.stdout = sys.__stdout__ = open(os.devnull, "w")
 
     def cli_knn(line):
         out.write(line.encode("utf-8") + b"\n")

@@ -43,7 +43,7 @@ pub enum Command {
     /// Every match of frame FRAME_ID-1 into FRAME_ID, judged by the true geometry; writes matches.png.
     #[command(name = "match_all")]
     MatchAll(MatchAllArgs),
-    /// Mark a student's vision_tasks.py as the lab's automarker does (runs it with python3).
+    /// Mark a student's vision_tasks.py as the lab's automarker does (python3 in a bubblewrap sandbox).
     Mark(MarkArgs),
 }
 
@@ -60,6 +60,10 @@ pub struct MarkArgs {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Run the file without the sandbox, with your own rights: only for your own file, or
+    /// inside a container that is itself the sandbox.
+    #[arg(long = "no-sandbox")]
+    pub no_sandbox: bool,
 }
 
 #[derive(Args, Debug)]

@@ -1,25 +1,27 @@
-//! `siftlab mark vision_tasks.py [-n N] [--seed S] [--json]`: the student's
-//! file marked as the lab's automarker marks it (docs/marking.md). The file
-//! runs in `python3 siftlab_harness.py` (the three `www/py` files, written to
-//! a temporary folder), which asks siftlab for every `knnMatch` on its
-//! stdout; `core::mark` draws the cases, computes the reference values,
-//! judges the replies and writes the report. Exit status: 0 for 20 / 20,
-//! 1 for fewer marks, 2 when the file could not be marked at all.
+//! `siftlab mark vision_tasks.py [-n N] [--seed S] [--json] [--no-sandbox]`:
+//! the student's file marked as the lab's automarker marks it
+//! (docs/marking.md). This is the native transport of `core::mark::Session`:
+//! the harness (the three `www/py` files, written to a temporary folder)
+//! runs in python3 inside a bubblewrap sandbox (`sandbox.rs`); requests go
+//! to its stdin, replies and knn requests come from its stdout, and each
+//! request's limit is the CPU time of the whole sandbox plus siftlab's knn
+//! answers, with a wall-clock backstop. Exit status: 0 for 20 / 20, 1 for
+//! fewer marks, 2 when the file could not be marked at all.
 
 use super::args::{Cli, MarkArgs};
 use super::common::{open_dataset, sift_params};
+use super::sandbox::{self, Python};
 use crate::dataset::Dataset;
 use crate::error::{Error, Result};
 use crate::mark::{
-    call_message, check_source, failed_call, judge, knn_answer, load_message, pair_message, parse_json, parse_line,
-    plan, reference, report_json, report_text, Case, CaseResult, Diagnosis, ErrorKind, HarnessLine, Marks, Pair,
-    Rejection, Reply, Task,
+    check_source, escaped, knn_answer, parse_line, report_json, report_text, HarnessLine, Limits, Marks, Outcome,
+    Pair, Pairs, Session, Status, Step, Task, MAX_LINE_BYTES,
 };
 use crate::sift::{detect_and_compute, Features, SiftParams};
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read, Write};
-use std::path::{Path, PathBuf};
-use std::process::{Child, Command, Stdio};
+use std::path::PathBuf;
+use std::process::{Child, Stdio};
 use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
@@ -31,14 +33,10 @@ const FILES: [(&str, &str); 3] = [
     ("vision_tasks_base.py", include_str!("../../../www/py/vision_tasks_base.py")),
 ];
 
-/// The lab's limits: 10 s per call, 300 s per task.
-const CALL_LIMIT: Duration = Duration::from_secs(10);
-const TASK_LIMIT: Duration = Duration::from_secs(300);
-/// Python's start (and numpy's import) and the loading of the file: what
-/// the reference marker allows (tests/scripts/mark_reference.py).
-const START_LIMIT: Duration = Duration::from_secs(60);
-/// A pair message is the harness's own work (a few hundred KB to decode).
-const PAIR_LIMIT: Duration = Duration::from_secs(60);
+/// How often a waiting request's CPU time and memory are read.
+const POLL: Duration = Duration::from_millis(50);
+/// Characters of a crashed harness's stderr kept for the report.
+const STDERR_TAIL: usize = 2000;
 
 /// Runs `mark` and returns the exit status.
 pub fn main(cli: &Cli, a: &MarkArgs) -> i32 {
@@ -66,21 +64,23 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         Ok(source) => {
             let ds = open_dataset(cli)?;
             let frames = frame_ids(&ds)?;
+            let runner = Runner::new(a.no_sandbox)?;
             eprintln!(
                 "marking {name}: {n} calls per task, seed {}, frames 1 to {} of {}",
                 a.seed,
                 frames.len(),
                 ds.root().display()
             );
-            let mut m = Marker::new(ds, sift_params(cli))?;
-            m.mark(source, &plan(a.seed, n, &frames), a.seed, n)?
+            let mut pairs = Frames { ds, params: sift_params(cli), frames: HashMap::new(), pairs: Vec::new() };
+            let session = Session::new(source, a.seed, n, &frames, Limits::default());
+            runner.mark(session, &mut pairs)?
         }
     };
     let mut out = std::io::stdout().lock();
     if a.json {
         let _ = writeln!(out, "{}", report_json(&marks));
     } else {
-        let _ = writeln!(out, "{name}: {:.2} / 20", marks.total);
+        let _ = writeln!(out, "{}: {:.2} / 20", escaped(&name, 200), marks.total);
         let _ = write!(out, "{}", report_text(&marks));
     }
     let _ = out.flush();
@@ -100,34 +100,18 @@ fn frame_ids(ds: &Dataset) -> Result<Vec<u32>> {
     Ok((1..count).collect())
 }
 
-/// The features of each frame (SIFT once per frame), the pairs built from
-/// them, and the harness process.
-struct Marker {
+/// SIFT of each frame once, and the pairs built from them.
+struct Frames {
     ds: Dataset,
     params: SiftParams,
     frames: HashMap<u32, Features>,
     pairs: Vec<Pair>,
-    dir: TempDir,
-    harness: Option<Harness>,
-    /// Whether Python's version was printed.
-    announced: bool,
 }
 
-impl Marker {
-    fn new(ds: Dataset, params: SiftParams) -> Result<Marker> {
-        let dir = TempDir::new()?;
-        for (file, text) in FILES {
-            let path = dir.0.join(file);
-            std::fs::write(&path, text)
-                .map_err(|e| Error::InvalidArgument(format!("cannot write {}: {e}", path.display())))?;
-        }
-        Ok(Marker { ds, params, frames: HashMap::new(), pairs: Vec::new(), dir, harness: None, announced: false })
-    }
-
-    /// The pair of FRAME_ID `frame` (computed on first use), by its index.
-    fn pair(&mut self, frame: u32) -> Result<usize> {
+impl Pairs for Frames {
+    fn pair(&mut self, frame: u32) -> Result<&Pair> {
         if let Some(i) = self.pairs.iter().position(|p| p.id == frame) {
-            return Ok(i);
+            return Ok(&self.pairs[i]);
         }
         for f in [frame - 1, frame] {
             if !self.frames.contains_key(&f) {
@@ -137,169 +121,144 @@ impl Marker {
         }
         let (prev, cur) = (self.frames[&(frame - 1)].clone(), self.frames[&frame].clone());
         self.pairs.push(Pair { id: frame, prev, cur });
-        Ok(self.pairs.len() - 1)
+        Ok(self.pairs.last().expect("pushed"))
     }
+}
 
-    /// A running harness with the file loaded (started again after a
-    /// time-out or a crash); a load that fails is the file's rejection.
-    fn start(&mut self, source: &str) -> Result<std::result::Result<(), Rejection>> {
-        if self.harness.is_none() {
-            let mut h = Harness::start(&self.dir.0)?;
-            if !self.announced {
-                eprintln!("python: {}", h.version);
-                self.announced = true;
-            }
-            h.send(&load_message(source));
-            match h.wait(START_LIMIT, &self.pairs)? {
-                Waited::Reply(Reply::Ok { .. }) => {}
-                Waited::Reply(Reply::Error { message, kind: ErrorKind::Protocol }) => {
-                    return Err(Error::InvalidArgument(format!("the harness refused the file: {message}")));
-                }
-                Waited::Reply(Reply::Error { message, kind }) => return Ok(Err(Rejection::Load { kind, message })),
-                Waited::Timeout => {
-                    h.kill();
-                    return Ok(Err(Rejection::LoadTimeout { seconds: START_LIMIT.as_secs_f64() }));
-                }
-                Waited::Ended(why) => {
-                    return Err(Error::InvalidArgument(format!("python3 ended while loading the file: {why}")));
-                }
-            }
-            self.harness = Some(h);
-        }
-        Ok(Ok(()))
-    }
+/// Starts harness processes: the interpreter found outside, the harness
+/// files, sandboxed or (with `--no-sandbox`) not.
+struct Runner {
+    python: Python,
+    dir: TempDir,
+    sandbox: bool,
+}
 
-    fn mark(&mut self, source: &str, cases: &[Case], seed: u64, n: usize) -> Result<Marks> {
-        if let Err(r) = self.start(source)? {
-            eprintln!("siftlab: the file scores 0: {r}");
-            return Ok(Marks::rejected(seed, n, r));
+impl Runner {
+    fn new(no_sandbox: bool) -> Result<Runner> {
+        let exe = std::env::var_os("SIFTLAB_PYTHON").unwrap_or_else(|| "python3".into());
+        let python = Python::find(&exe)?;
+        let dir = TempDir::new()?;
+        for (file, text) in FILES {
+            let path = dir.0.join(file);
+            std::fs::write(&path, text)
+                .map_err(|e| Error::InvalidArgument(format!("cannot write {}: {e}", path.display())))?;
         }
-        let mut results = Vec::with_capacity(cases.len());
-        for task in Task::ALL {
-            let (t0, mut spent) = (Instant::now(), Duration::ZERO);
-            for case in cases.iter().filter(|c| c.task() == task) {
-                let r = self.mark_case(source, case, &mut spent)?;
-                results.push(r);
-            }
-            let of: Vec<&CaseResult> = results.iter().filter(|r| r.case.task() == task).collect();
-            let correct = of.iter().filter(|r| r.status == crate::mark::Status::Correct).count();
+        if no_sandbox {
             eprintln!(
-                "{}: {correct} of {} correct ({:.1} s, calls {:.1} s)",
-                task.name(),
-                of.len(),
-                t0.elapsed().as_secs_f64(),
-                spent.as_secs_f64()
+                "siftlab: --no-sandbox: the file runs with your own rights (your files, network, processes); \
+                 use it only for your own file, or inside a container that is itself the sandbox"
             );
+        } else {
+            #[cfg(not(target_os = "linux"))]
+            return Err(Error::InvalidArgument(
+                "no sandbox on this system (siftlab mark sandboxes with bubblewrap, on Linux): \
+                 pass --no-sandbox to run the file with your own rights"
+                    .into(),
+            ));
+            sandbox::check(&python, &dir.0).map_err(|why| {
+                Error::InvalidArgument(format!(
+                    "no usable sandbox here ({why}): siftlab mark runs student files in bubblewrap \
+                     (apt install bubblewrap; user namespaces must be allowed). Pass --no-sandbox to run \
+                     the file with your own rights (only your own file, or inside a container that is \
+                     itself the sandbox)"
+                ))
+            })?;
         }
-        if let Some(h) = self.harness.take() {
-            h.close();
-        }
-        Ok(Marks::new(seed, n, results))
+        Ok(Runner { python, dir, sandbox: !no_sandbox })
     }
 
-    fn mark_case(&mut self, source: &str, case: &Case, spent: &mut Duration) -> Result<CaseResult> {
-        let i = self.pair(case.frame())?;
-        let expected = reference(case, &self.pairs[i].prev, &self.pairs[i].cur)?;
-        if *spent >= TASK_LIMIT {
-            let d = Diagnosis::TaskTimeLimit { seconds: TASK_LIMIT.as_secs_f64() };
-            return Ok(failed_call(case, &expected, d, 0.0));
-        }
-        if let Err(r) = self.start(source)? {
-            // Loaded before; failing now (it reads a file that changed?) is
-            // no mark of the student's.
-            return Err(Error::InvalidArgument(format!("the file failed to load again: {r}")));
-        }
-        let Some(h) = self.harness.as_mut() else {
-            return Err(Error::InvalidArgument("the harness is not running".into()));
-        };
-        let id = case.frame();
-        if !h.sent.contains(&id) {
-            let p = &self.pairs[i];
-            h.send(&pair_message(p.id, &p.prev, &p.cur));
-            match h.wait(PAIR_LIMIT, &self.pairs)? {
-                Waited::Reply(Reply::Ok { .. }) => {}
-                other => return Err(Error::InvalidArgument(format!("the harness did not take pair {id}: {other:?}"))),
-            }
-            h.sent.insert(id);
-        }
-        let limit = CALL_LIMIT.min(TASK_LIMIT - *spent);
-        h.send(&call_message(case, id, &expected));
-        let t0 = Instant::now();
-        let waited = h.wait(limit, &self.pairs)?;
-        let took = t0.elapsed();
-        *spent += took;
-        let (prev, cur) = (&self.pairs[i].prev, &self.pairs[i].cur);
-        Ok(match waited {
-            Waited::Reply(Reply::Error { message, kind: ErrorKind::Protocol }) => {
-                return Err(Error::InvalidArgument(format!("the harness refused a call: {message}")));
-            }
-            Waited::Reply(reply) => judge(case, &expected, &reply, prev, cur, took.as_secs_f64()),
-            Waited::Timeout => {
-                if let Some(h) = self.harness.take() {
-                    h.kill();
+    fn mark(&self, mut session: Session, pairs: &mut Frames) -> Result<Marks> {
+        eprintln!(
+            "python: {} (Python {}, {}), {}",
+            self.python.exe.display(),
+            self.python.version,
+            self.python.numpy.as_ref().map_or("no numpy".into(), |v| format!("numpy {v}")),
+            if self.sandbox { "sandboxed (bubblewrap)" } else { "NOT sandboxed" }
+        );
+        let mut harness: Option<Harness> = None;
+        let mut task = None;
+        let mut task_started = Instant::now();
+        loop {
+            let current = session.current().map(|c| c.task());
+            if current != task {
+                if let Some(t) = task {
+                    report_task(&session, t, task_started);
                 }
-                let d = Diagnosis::Timeout { seconds: limit.as_secs_f64() };
-                failed_call(case, &expected, d, took.as_secs_f64())
+                task = current;
+                task_started = Instant::now();
             }
-            Waited::Ended(why) => {
-                self.harness = None;
-                failed_call(case, &expected, Diagnosis::Crashed(why), took.as_secs_f64())
+            match session.next(pairs)? {
+                Step::Start => {
+                    drop(harness.take());
+                    harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox)?);
+                    session.started();
+                }
+                Step::Send { id, line, limit } => {
+                    let Some(h) = harness.as_mut() else {
+                        return Err(Error::InvalidArgument("no harness is running".into()));
+                    };
+                    let outcome = h.request(&line, id, limit, &pairs.pairs, &mut session.stray_lines);
+                    if !matches!(outcome, Outcome::Reply(..)) {
+                        drop(harness.take());
+                    }
+                    session.outcome(outcome, pairs)?;
+                }
+                Step::Done(marks) => {
+                    if let Some(h) = harness.take() {
+                        h.close();
+                    }
+                    if session.stray_lines > 0 {
+                        eprintln!("siftlab: {} line(s) from the file's process were no reply and were dropped", session.stray_lines);
+                    }
+                    return Ok(marks);
+                }
             }
-        })
+        }
     }
 }
 
-/// How waiting for a reply ended.
-#[derive(Debug)]
-enum Waited {
-    Reply(Reply),
-    Timeout,
-    /// The process closed its stdout (it ended): its status and stderr.
-    Ended(String),
+fn report_task(session: &Session, task: Task, started: Instant) {
+    let of: Vec<_> = session.results().iter().filter(|r| r.case.task() == task).collect();
+    let correct = of.iter().filter(|r| r.status == Status::Correct).count();
+    eprintln!(
+        "{}: {correct} of {} correct ({:.1} s, calls {:.1} s of CPU)",
+        task.name(),
+        of.len(),
+        started.elapsed().as_secs_f64(),
+        session.spent(task)
+    );
 }
 
-/// `python3 siftlab_harness.py`: requests and knn answers go in through a
-/// writer thread (a long write never blocks the time-outs), lines come out
-/// through a reader thread.
+/// One line read from the harness, or why reading stopped.
+enum FromHarness {
+    Line(String),
+    /// A line over MAX_LINE_BYTES, dropped unread.
+    TooLong,
+}
+
+/// The harness process: requests go in through a writer thread (a long
+/// write never blocks the limits), lines come out through a reader thread.
 struct Harness {
     child: Child,
+    pid: u32,
     to_child: Option<Sender<Vec<u8>>>,
-    lines: Receiver<String>,
+    lines: Receiver<FromHarness>,
     stderr: Arc<Mutex<Vec<u8>>>,
-    /// Pairs this process holds.
-    sent: HashSet<u32>,
-    /// "Python 3.11.7, numpy 1.26.4", from the harness's hello.
-    version: String,
 }
 
 impl Harness {
-    fn start(dir: &Path) -> Result<Harness> {
-        let python = std::env::var_os("SIFTLAB_PYTHON").unwrap_or_else(|| "python3".into());
-        let mut child = Command::new(&python)
-            .arg("siftlab_harness.py")
-            .current_dir(dir)
-            .env("PYTHONDONTWRITEBYTECODE", "1")
-            .env("PYTHONUNBUFFERED", "1")
-            .env("PYTHONIOENCODING", "utf-8")
+    fn start(python: &Python, dir: &std::path::Path, sandbox: bool) -> Result<Harness> {
+        let mut child = python
+            .command(dir, sandbox)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
-            .map_err(|e| {
-                let python = python.to_string_lossy();
-                Error::InvalidArgument(if e.kind() == std::io::ErrorKind::NotFound {
-                    format!(
-                        "{python} not found: siftlab mark runs the student's file with Python 3 (install python3, \
-                         or name one with SIFTLAB_PYTHON=/path/to/python3)"
-                    )
-                } else {
-                    format!("cannot start {python}: {e}")
-                })
-            })?;
+            .map_err(|e| Error::InvalidArgument(format!("cannot start the harness: {e}")))?;
         let (Some(mut stdin), Some(stdout), Some(mut stderr)) =
             (child.stdin.take(), child.stdout.take(), child.stderr.take())
         else {
-            return Err(Error::InvalidArgument("python3's pipes are missing".into()));
+            return Err(Error::InvalidArgument("the harness's pipes are missing".into()));
         };
         let (to_child, requests) = channel::<Vec<u8>>();
         std::thread::spawn(move || {
@@ -310,22 +269,8 @@ impl Harness {
                 }
             }
         });
-        let (tx, lines) = channel::<String>();
-        std::thread::spawn(move || {
-            let mut r = BufReader::with_capacity(1 << 20, stdout);
-            let mut line = String::new();
-            loop {
-                line.clear();
-                match r.read_line(&mut line) {
-                    Ok(0) | Err(_) => break,
-                    Ok(_) => {
-                        if tx.send(line.trim_end_matches(['\n', '\r']).to_string()).is_err() {
-                            break;
-                        }
-                    }
-                }
-            }
-        });
+        let (tx, lines) = channel::<FromHarness>();
+        std::thread::spawn(move || read_lines(stdout, tx));
         let tail = Arc::new(Mutex::new(Vec::new()));
         let keep = Arc::clone(&tail);
         std::thread::spawn(move || {
@@ -336,77 +281,65 @@ impl Harness {
                 }
                 if let Ok(mut t) = keep.lock() {
                     t.extend_from_slice(&buf[..k]);
-                    let excess = t.len().saturating_sub(4000);
+                    let excess = t.len().saturating_sub(4 * STDERR_TAIL);
                     t.drain(..excess);
                 }
             }
         });
-        let mut h = Harness {
-            child,
-            to_child: Some(to_child),
-            lines,
-            stderr: tail,
-            sent: HashSet::new(),
-            version: String::new(),
-        };
-        let python = python.to_string_lossy();
-        h.send("{\"op\": \"hello\"}");
-        let line = match h.lines.recv_timeout(START_LIMIT) {
-            Ok(line) => line,
-            Err(RecvTimeoutError::Timeout) => {
-                h.kill();
-                return Err(Error::InvalidArgument(format!(
-                    "{python} did not answer within {} s",
-                    START_LIMIT.as_secs()
-                )));
-            }
-            Err(RecvTimeoutError::Disconnected) => {
-                return Err(Error::InvalidArgument(format!(
-                    "{python} could not run siftlab's harness (Python 3.8 or later is needed): {}",
-                    h.ended()
-                )))
-            }
-        };
-        let hello = parse_json(&line).ok().filter(|v| v.get("ok").is_some());
-        let Some(hello) = hello else {
-            h.kill();
-            return Err(Error::InvalidArgument(format!("the harness did not start: {line}")));
-        };
-        let field = |k: &str| hello.get(k).and_then(|v| v.as_str()).map(str::to_string);
-        h.version = format!(
-            "{python} (Python {}, {})",
-            field("python").unwrap_or_else(|| "?".into()),
-            field("numpy").map_or("no numpy".into(), |v| format!("numpy {v}"))
-        );
-        Ok(h)
+        let pid = child.id();
+        Ok(Harness { child, pid, to_child: Some(to_child), lines, stderr: tail })
     }
 
-    fn send(&self, msg: &str) {
+    /// Sends request `id` and waits for its reply, answering knn requests;
+    /// the request's time is the sandbox's CPU time plus the knn answers'.
+    fn request(&mut self, line: &str, id: u64, limit: f64, pairs: &[Pair], stray: &mut usize) -> Outcome {
+        let Some((cpu0, _)) = sandbox::tree_usage(self.pid) else {
+            return Outcome::Crashed(self.ended(), 0.0);
+        };
         if let Some(tx) = &self.to_child {
-            let _ = tx.send(msg.as_bytes().to_vec());
+            let _ = tx.send(line.as_bytes().to_vec());
         }
-    }
-
-    /// Reads lines until a reply, answering knn requests from `pairs`,
-    /// for at most `limit` (the answers' time included).
-    fn wait(&mut self, limit: Duration, pairs: &[Pair]) -> Result<Waited> {
-        let deadline = Instant::now() + limit;
+        let t0 = Instant::now();
+        let wall = Duration::from_secs_f64(limit * Limits::default().wall_factor);
+        let mut host = 0.0;
+        let mut used = 0.0;
         loop {
-            let left = deadline.saturating_duration_since(Instant::now());
-            match self.lines.recv_timeout(left) {
-                Ok(line) => {
-                    // The harness writes nothing else to stdout; a student's
-                    // raw write to the file descriptor is skipped.
-                    if !line.starts_with('{') {
-                        continue;
+            match self.lines.recv_timeout(POLL) {
+                Ok(FromHarness::Line(l)) => match parse_line(&l, id) {
+                    HarnessLine::Knn => {
+                        let c0 = sandbox::thread_cpu();
+                        let answer = knn_answer(&l, pairs);
+                        host += sandbox::thread_cpu() - c0;
+                        if let Some(tx) = &self.to_child {
+                            let _ = tx.send(answer.into_bytes());
+                        }
                     }
-                    match parse_line(&line)? {
-                        HarnessLine::Knn => self.send(&knn_answer(&line, pairs)),
-                        HarnessLine::Reply(r) => return Ok(Waited::Reply(r)),
+                    HarnessLine::Reply(_) => {
+                        let cpu = sandbox::tree_usage(self.pid).map_or(used, |(c, _)| c - cpu0 + host);
+                        return Outcome::Reply(l, cpu.max(used));
+                    }
+                    HarnessLine::Stray(_) => *stray += 1,
+                },
+                Ok(FromHarness::TooLong) => *stray += 1,
+                Err(RecvTimeoutError::Timeout) => {}
+                Err(RecvTimeoutError::Disconnected) => return Outcome::Crashed(self.ended(), used),
+            }
+            match sandbox::tree_usage(self.pid) {
+                Some((cpu, rss)) => {
+                    used = cpu - cpu0 + host;
+                    if rss > sandbox::MEMORY_BYTES {
+                        self.kill();
+                        return Outcome::Crashed(
+                            format!("it used over {} GB of memory", sandbox::MEMORY_BYTES >> 30),
+                            used,
+                        );
                     }
                 }
-                Err(RecvTimeoutError::Timeout) => return Ok(Waited::Timeout),
-                Err(RecvTimeoutError::Disconnected) => return Ok(Waited::Ended(self.ended())),
+                None => return Outcome::Crashed(self.ended(), used),
+            }
+            if used > limit || t0.elapsed() > wall {
+                self.kill();
+                return Outcome::Timeout(used.max(limit.min(t0.elapsed().as_secs_f64())));
             }
         }
     }
@@ -418,25 +351,32 @@ impl Harness {
         // The stderr thread may still be reading the last bytes.
         std::thread::sleep(Duration::from_millis(50));
         let tail = self.stderr.lock().map(|t| String::from_utf8_lossy(&t).trim().to_string()).unwrap_or_default();
+        sandbox::kill_tree(self.pid);
         if tail.is_empty() {
             status
         } else {
-            format!("{status}; stderr: {tail}")
+            let skip = tail.chars().count().saturating_sub(STDERR_TAIL);
+            let tail: String = tail.chars().skip(skip).collect();
+            format!("{status}; stderr: {}", escaped(&tail, STDERR_TAIL))
         }
     }
 
-    /// Stops the process (a time-out): kill, then reap it.
-    fn kill(self) {
-        drop(self);
+    /// Ends the sandbox: every process in it.
+    fn kill(&mut self) {
+        self.to_child = None;
+        sandbox::kill_tree(self.pid);
+        let _ = self.child.kill();
+        let _ = self.child.wait();
     }
 
-    /// Ends the process normally: stdin closed, it returns.
+    /// Ends the process normally (stdin closed, it returns), then makes
+    /// sure nothing it started is left.
     fn close(mut self) {
         self.to_child = None;
         let deadline = Instant::now() + Duration::from_secs(5);
         while Instant::now() < deadline {
             if let Ok(Some(_)) = self.child.try_wait() {
-                return;
+                break;
             }
             std::thread::sleep(Duration::from_millis(20));
         }
@@ -445,14 +385,47 @@ impl Harness {
 }
 
 impl Drop for Harness {
-    /// A process still running (an error ended the marking, a time-out) is
-    /// killed and reaped; one that ended is only reaped.
     fn drop(&mut self) {
-        self.to_child = None;
-        if let Ok(None) = self.child.try_wait() {
-            let _ = self.child.kill();
+        self.kill();
+    }
+}
+
+/// Lines of at most MAX_LINE_BYTES; a longer one is skipped to its end.
+fn read_lines(stdout: std::process::ChildStdout, tx: Sender<FromHarness>) {
+    let mut r = BufReader::with_capacity(1 << 20, stdout);
+    let mut line = Vec::new();
+    let mut too_long = false;
+    loop {
+        let buf = match r.fill_buf() {
+            Ok([]) | Err(_) => return,
+            Ok(b) => b,
+        };
+        let (chunk, end) = match buf.iter().position(|&b| b == b'\n') {
+            Some(i) => (&buf[..i], Some(i + 1)),
+            None => (buf, None),
+        };
+        if !too_long {
+            line.extend_from_slice(chunk);
+            if line.len() > MAX_LINE_BYTES {
+                too_long = true;
+                line = Vec::new();
+            }
         }
-        let _ = self.child.wait();
+        let used = end.unwrap_or(buf.len());
+        r.consume(used);
+        if end.is_some() {
+            let item = if too_long {
+                FromHarness::TooLong
+            } else {
+                let text = String::from_utf8_lossy(&line).trim_end_matches('\r').to_string();
+                FromHarness::Line(text)
+            };
+            if tx.send(item).is_err() {
+                return;
+            }
+            line.clear();
+            too_long = false;
+        }
     }
 }
 
@@ -465,6 +438,9 @@ impl TempDir {
         let dir = std::env::temp_dir().join(format!("siftlab-mark-{}-{nanos}", std::process::id()));
         std::fs::create_dir_all(&dir)
             .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", dir.display())))?;
+        // Readable by the sandbox's marking uid (read-only inside it).
+        use std::os::unix::fs::PermissionsExt;
+        let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755));
         Ok(TempDir(dir))
     }
 }

@@ -7,6 +7,7 @@ pub mod anatomy;
 pub mod args;
 pub mod common;
 pub mod mark;
+mod sandbox;
 pub mod match_all;
 pub mod trajectory;
 pub mod visual;

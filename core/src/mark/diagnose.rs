@@ -5,7 +5,9 @@
 
 use super::cases::Case;
 use super::json::Json;
+use super::escape::escaped;
 use super::protocol::{ErrorKind, Reply};
+use super::pyvalue::{info_type_problem, info_value, PyValue};
 use super::reference::{
     difference_at, expected_text, first_difference, got_lists_text, info_equal, info_json, matches_equal,
     returned_matches, shorten, Expected, Got,
@@ -222,7 +224,7 @@ pub fn judge(
         status,
         diagnosis,
         expected: if status == Status::Correct { String::new() } else { expected },
-        returned: if status == Status::Correct { String::new() } else { shorten(&returned, SHOWN) },
+        returned: if status == Status::Correct { String::new() } else { escaped(&returned, SHOWN) },
         seconds,
     };
     match reply {
@@ -230,7 +232,7 @@ pub fn judge(
             let d = error_diagnosis(case, expected, message, *kind);
             result(Status::Error, Some(d), expected_summary(expected), "no value".into())
         }
-        Reply::Ok { value, repr, equal } => match expected {
+        Reply::Ok { value } => match expected {
             Expected::Matches(want) => match returned_matches(value) {
                 Err(e) => {
                     let d = Diagnosis::WrongType(format!(
@@ -249,19 +251,26 @@ pub fn judge(
                 }
             },
             Expected::Info { matches, info } => {
-                let shown = repr.clone().unwrap_or_else(|| value.py_repr());
-                let same_numbers = info_equal(info, value);
-                // The harness's Python `==` with the expected tuple decides
-                // where it was asked; the JSON comparison otherwise.
-                if equal.unwrap_or(same_numbers) {
+                // The verdict is Python's == applied here to the typed value:
+                // nothing the student's objects define takes part in it.
+                let got = PyValue::from_json(value);
+                let shown = got.py_repr();
+                if let Some(problem) = info_type_problem(&got) {
+                    return result(Status::Error, Some(Diagnosis::WrongType(problem)), info.to_string(), shown);
+                }
+                if got.py_eq(&info_value(info)) {
                     return result(Status::Correct, None, String::new(), String::new());
                 }
-                if let Some(what) = info_shape_problem(value) {
+                let value = got.to_json();
+                if let Some(what) = info_shape_problem(&value) {
                     let d = if matches.is_empty() { Diagnosis::EmptyCase(None) } else { Diagnosis::InfoShape(what) };
                     return result(Status::Error, Some(d), info.to_string(), shown);
                 }
-                let d =
-                    if same_numbers { Diagnosis::InfoTypes } else { diagnose_info(matches, info, value, prev, cur) };
+                let d = if info_equal(info, &value) {
+                    Diagnosis::InfoTypes
+                } else {
+                    diagnose_info(matches, info, &value, prev, cur)
+                };
                 result(Status::Wrong, Some(d), info.to_string(), shown)
             }
         },
@@ -689,7 +698,7 @@ mod tests {
         }
         // A type problem is an error.
         let r =
-            judge(&dt, &e, &Reply::Ok { value: parse("[1, 2]").unwrap(), repr: None, equal: None }, &p.0, &p.1, 0.0);
+            judge(&dt, &e, &Reply::Ok { value: parse("[1, 2]").unwrap() }, &p.0, &p.1, 0.0);
         assert_eq!((r.status, r.diagnosis.unwrap().code()), (Status::Error, "wrong_type"));
         let r = judge(
             &nn_none,
@@ -710,19 +719,18 @@ mod tests {
         let e = reference(&case, &p.0, &p.1).unwrap();
         let Expected::Info { matches, info } = &e else { panic!() };
         let judge_v = |text: &str| {
-            let r =
-                judge(&case, &e, &Reply::Ok { value: parse(text).unwrap(), repr: None, equal: None }, &p.0, &p.1, 0.0);
+            let r = judge(&case, &e, &Reply::Ok { value: typed(text) }, &p.0, &p.1, 0.0);
             (r.status, r.diagnosis.map(|d| d.code()))
         };
         assert_eq!(judge_v(&info_json(info).to_json()), (Status::Correct, None));
-        // Python's == on the harness's side decides: lists for points are not tuples.
-        let by_python = |equal| {
-            let reply = Reply::Ok { value: info_json(info), repr: None, equal: Some(equal) };
-            let r = judge(&case, &e, &reply, &p.0, &p.1, 0.0);
-            (r.status, r.diagnosis.map(|d| d.code()))
-        };
-        assert_eq!(by_python(true), (Status::Correct, None));
-        assert_eq!(by_python(false), (Status::Wrong, Some("wrong_types_inside")));
+        // Python's ==, applied here: points as lists are not tuples.
+        let lists = Reply::Ok { value: typed_with(&info_json(info), 0, true) };
+        let r = judge(&case, &e, &lists, &p.0, &p.1, 0.0);
+        assert_eq!((r.status, r.diagnosis.map(|d| d.code())), (Status::Wrong, Some("wrong_types_inside")));
+        // An object whose __eq__ always says True arrives opaque: wrong, never correct.
+        let forged = parse(r#"{"tuple": [{"opaque": "Always"}, {"list": []}, {"list": []}]}"#).unwrap();
+        let r = judge(&case, &e, &Reply::Ok { value: forged }, &p.0, &p.1, 0.0);
+        assert_eq!(r.status, Status::Error);
         let q = p.0.keypoints[3];
         let pts = |f: &dyn Fn(f32) -> String, swap: bool| -> String {
             let pt =
@@ -734,15 +742,16 @@ mod tests {
         assert_eq!(judge_v(&pts(&|v| py_round(v).to_string(), false)).1, Some("rounded"));
         assert_eq!(judge_v(&pts(&|v| py_f32(v), false)).1, Some("float_coordinates"));
         assert_eq!(judge_v(&pts(&|v| (v as i64).to_string(), true)).1, Some("swapped_xy"));
-        assert_eq!(judge_v("[[0, 0], []]"), (Status::Error, Some("wrong_shape")));
-        assert_eq!(judge_v("null"), (Status::Error, Some("wrong_shape")));
+        assert_eq!(judge_v("[[0, 0], []]"), (Status::Error, Some("wrong_type")));
+        assert_eq!(judge_v("null"), (Status::Error, Some("wrong_type")));
+        assert_eq!(judge_v("[[0, 0], [[1]], [1.5]]"), (Status::Error, Some("wrong_shape")));
         let empty = Case::Info { frame: 1, strategy: Strategy::Dt(0.0), feature: 3 };
         let e0 = reference(&empty, &p.0, &p.1).unwrap();
         assert!(e0.info_matches().is_empty());
         let r = judge(
             &empty,
             &e0,
-            &Reply::Ok { value: parse("[[0, 0], [], []]").unwrap(), repr: None, equal: None },
+            &Reply::Ok { value: typed("[[0, 0], [], []]") },
             &p.0,
             &p.1,
             0.0,
@@ -760,20 +769,49 @@ mod tests {
         let r = judge(
             &empty,
             &e0,
-            &Reply::Ok { value: parse("[null, [], []]").unwrap(), repr: None, equal: None },
+            &Reply::Ok { value: typed("[null, [], []]") },
             &p.0,
             &p.1,
             0.0,
         );
-        assert_eq!(r.diagnosis.unwrap().code(), "empty_case");
+        assert_eq!(r.diagnosis.unwrap().code(), "wrong_type");
         let r = judge(
             &empty,
             &e0,
-            &Reply::Ok { value: parse("[[1, 0], [], []]").unwrap(), repr: None, equal: None },
+            &Reply::Ok { value: typed("[[1, 0], [], []]") },
             &p.0,
             &p.1,
             0.0,
         );
         assert_eq!((r.status, r.diagnosis.unwrap().code()), (Status::Wrong, "empty_case"));
+    }
+
+    /// matching_info's value as the harness encodes it, from plain JSON
+    /// `[p, [p, …], [d, …]]`: the whole and `p` tuples, the two others lists.
+    fn typed(text: &str) -> Json {
+        typed_with(&parse(text).unwrap(), 0, false)
+    }
+
+    fn typed_with(v: &Json, depth: usize, points_as_lists: bool) -> Json {
+        let tag = |t: &str, items: &[Json], d: usize| {
+            Json::Obj(vec![(
+                t.to_string(),
+                Json::Arr(items.iter().map(|x| typed_with(x, d, points_as_lists)).collect()),
+            )])
+        };
+        match (v, depth) {
+            (Json::Arr(a), 0) if a.len() == 3 => Json::Obj(vec![(
+                "tuple".into(),
+                Json::Arr(vec![
+                    typed_with(&a[0], 2, points_as_lists),
+                    tag("list", a[1].as_arr().unwrap_or(&[]), 2),
+                    tag("list", a[2].as_arr().unwrap_or(&[]), 3),
+                ]),
+            )]),
+            (Json::Arr(a), 0) => tag("tuple", a, 1),
+            (Json::Arr(a), 2) if points_as_lists => tag("list", a, 3),
+            (Json::Arr(a), _) => tag("tuple", a, 3),
+            (v, _) => v.clone(),
+        }
     }
 }

@@ -5,7 +5,8 @@
 //! No I/O here: the CLI (`siftlab mark`) and the app's worker run the
 //! harness and carry the messages.
 //!
-//! A marking, in order:
+//! A marking is a [`Session`] (the loop, limits and restarts) driven by a
+//! transport; underneath, in order:
 //! 1. [`check_source`] on the file's bytes (a [`Rejection`] scores 0:
 //!    [`Marks::rejected`]);
 //! 2. [`plan`] the cases; send [`load_message`] and read its reply with
@@ -20,19 +21,26 @@
 mod b64;
 mod cases;
 mod diagnose;
+mod escape;
 mod json;
 mod protocol;
+mod pyvalue;
 mod reference;
 mod report;
+mod session;
 mod source;
 
 pub use b64::{base64, unbase64};
 pub use cases::{plan, threshold_text, Case, Task, DEFAULT_CASES, NUM_FEATURES};
 pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Status};
 pub use json::{parse as parse_json, Json};
+pub use escape::{escaped, is_clean};
 pub use protocol::{
-    call_message, knn_answer, load_message, pair_message, parse_line, parse_reply, ErrorKind, HarnessLine, Pair, Reply,
+    call_message, knn_answer, load_message, pair_message, parse_line, parse_reply, with_id, ErrorKind, HarnessLine, Pair,
+    Reply, MAX_LINE_BYTES, MAX_MESSAGE_CHARS,
 };
+pub use pyvalue::{info_type_problem, info_value, PyValue};
+pub use session::{Limits, Outcome, Pairs, Session, Step};
 pub use reference::{reference, Expected};
 pub use report::{report_json, report_text, Marks, TaskMarks};
 pub use source::{check_source, Rejection, MAX_SOURCE_BYTES};

@@ -5,7 +5,7 @@
 use super::b64::{base64, unbase64};
 use super::cases::Case;
 use super::json::{parse, push_str, quote, Json};
-use super::reference::{info_json, Expected};
+use super::reference::Expected;
 use crate::matching::knn_match;
 use crate::pyfmt::py_f32;
 use crate::sift::{Features, KeyPoint};
@@ -63,12 +63,12 @@ fn push_keypoints(s: &mut String, kps: &[KeyPoint]) {
 /// `{"op": "call", "fn", "pair", …}`: dt / nn / nndr with `threshold`
 /// (null for None) and `"compact": true` (the lists come back as base64
 /// arrays); matching_info with `matches` as `[[q, t, d], …]`, the reference
-/// matches of the case, and `expected`, the reference tuple as JSON, which
-/// the harness compares with the returned value by Python's `==`.
+/// matches of the case. The expected value never goes to the harness: the
+/// reply is judged here.
 pub fn call_message(case: &Case, pair: u32, expected: &Expected) -> String {
     let name = case.task().name();
     match (case, expected) {
-        (Case::Info { .. }, Expected::Info { matches, info }) => {
+        (Case::Info { .. }, Expected::Info { matches, .. }) => {
             let mut s = format!("{{\"op\": \"call\", \"fn\": \"{name}\", \"pair\": {pair}, \"matches\": [");
             for (i, m) in matches.iter().enumerate() {
                 if i > 0 {
@@ -76,9 +76,7 @@ pub fn call_message(case: &Case, pair: u32, expected: &Expected) -> String {
                 }
                 let _ = write!(s, "[{}, {}, {}]", m.query_idx, m.train_idx, py_f32(m.distance));
             }
-            s.push_str("], \"expected\": ");
-            info_json(info).write(&mut s);
-            s.push('}');
+            s.push_str("]}");
             s
         }
         _ => {
@@ -88,6 +86,22 @@ pub fn call_message(case: &Case, pair: u32, expected: &Expected) -> String {
         }
     }
 }
+
+/// A request with its id: `{"req": ID, …}`. The harness echoes the id in its
+/// reply; a line with another id is never taken for this request's reply.
+pub fn with_id(id: u64, message: &str) -> String {
+    match message.strip_prefix('{') {
+        Some(rest) => format!("{{\"req\": {id}, {rest}"),
+        None => message.to_string(),
+    }
+}
+
+/// The longest line siftlab reads from the harness: dt's compact reply on
+/// 1500 × 1500 is about 36 MB. A longer line is dropped unread.
+pub const MAX_LINE_BYTES: usize = 64 << 20;
+
+/// Characters of a student's message (an exception's text) kept.
+pub const MAX_MESSAGE_CHARS: usize = 2000;
 
 /// What a failed `load` or `call` was, as the harness names it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -119,44 +133,59 @@ impl ErrorKind {
 /// The harness's answer to `load`, `pair` or `call`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Reply {
-    /// `{"ok": VALUE}`; for matching_info also `"repr"` (Python's repr of
-    /// the value) and `"equal"` (whether it `==` the expected tuple).
-    Ok { value: Json, repr: Option<String>, equal: Option<bool> },
-    /// `{"error": MSG, "kind": KIND}` (an unknown kind is a runtime error).
+    /// `{"ok": VALUE}`: dt/nn/nndr's lists, matching_info's typed value
+    /// (`PyValue`), or `true`.
+    Ok { value: Json },
+    /// `{"error": MSG, "kind": KIND}` (an unknown kind is a runtime error);
+    /// the message escaped and bounded (it is the student's text).
     Error { message: String, kind: ErrorKind },
 }
 
-/// One line from the harness.
+/// One line from the harness, read for the request `id`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum HarnessLine {
+    /// The reply to the request.
     Reply(Reply),
     /// `{"op": "knn", …}`: answer it with [`knn_answer`] on the same line.
     Knn,
+    /// Anything else (not JSON, another id, no id, a reply of no known
+    /// shape): dropped, never taken for a reply; the text says why.
+    Stray(String),
 }
 
-/// Reads a line the harness wrote: a reply or a knn request.
-pub fn parse_line(line: &str) -> crate::Result<HarnessLine> {
-    let v = parse(line).map_err(|e| bad_line(line, &e))?;
+/// Reads a line the harness wrote while siftlab waits for the reply to
+/// request `id`.
+pub fn parse_line(line: &str, id: u64) -> HarnessLine {
+    let v = match parse(line) {
+        Ok(v) => v,
+        Err(e) => return HarnessLine::Stray(bad_line(line, &e)),
+    };
     if v.get("op").and_then(Json::as_str) == Some("knn") {
-        return Ok(HarnessLine::Knn);
+        return HarnessLine::Knn;
     }
-    reply_of(v).map(HarnessLine::Reply).map_err(|e| bad_line(line, &e))
+    match v.get("req").and_then(Json::as_i64) {
+        Some(got) if u64::try_from(got) == Ok(id) => {}
+        Some(got) => return HarnessLine::Stray(format!("a line for request {got}, not {id}")),
+        None => return HarnessLine::Stray(bad_line(line, "no request id")),
+    }
+    match reply_of(v) {
+        Ok(r) => HarnessLine::Reply(r),
+        Err(e) => HarnessLine::Stray(bad_line(line, &e)),
+    }
 }
 
-/// Reads a reply line (a knn request here is an error).
-pub fn parse_reply(line: &str) -> crate::Result<Reply> {
-    match parse_line(line)? {
+/// Reads a reply line for request `id` (a knn request or a stray line
+/// here is an error).
+pub fn parse_reply(line: &str, id: u64) -> crate::Result<Reply> {
+    match parse_line(line, id) {
         HarnessLine::Reply(r) => Ok(r),
-        HarnessLine::Knn => Err(bad_line(line, "a knn request where a reply was expected")),
+        HarnessLine::Knn => Err(crate::Error::InvalidArgument("a knn request where a reply was expected".into())),
+        HarnessLine::Stray(why) => Err(crate::Error::InvalidArgument(why)),
     }
 }
 
-fn bad_line(line: &str, why: &str) -> crate::Error {
-    let mut shown: String = line.chars().take(200).collect();
-    if shown.len() < line.len() {
-        shown.push('…');
-    }
-    crate::Error::InvalidArgument(format!("the harness sent a line siftlab cannot read ({why}): {shown}"))
+fn bad_line(line: &str, why: &str) -> String {
+    format!("a line siftlab cannot read ({why}): {}", super::escape::escaped(line, 200))
 }
 
 fn reply_of(v: Json) -> Result<Reply, String> {
@@ -164,19 +193,11 @@ fn reply_of(v: Json) -> Result<Reply, String> {
         return Err("not a JSON object".into());
     };
     let mut value = None;
-    let mut repr = None;
-    let mut equal = None;
     let mut message = None;
     let mut kind = None;
     for (k, v) in kv {
         match k.as_str() {
             "ok" => value = Some(v),
-            "repr" => repr = v.as_str().map(str::to_string),
-            "equal" => {
-                if let Json::Bool(b) = v {
-                    equal = Some(b)
-                }
-            }
             "error" => message = Some(v.as_str().map_or_else(|| v.py_repr(), str::to_string)),
             "kind" => kind = v.as_str().map(str::to_string),
             _ => {}
@@ -190,10 +211,10 @@ fn reply_of(v: Json) -> Result<Reply, String> {
             Some("protocol") => ErrorKind::Protocol,
             _ => ErrorKind::Runtime,
         };
-        return Ok(Reply::Error { message, kind });
+        return Ok(Reply::Error { message: super::escape::escaped(&message, MAX_MESSAGE_CHARS), kind });
     }
     match value {
-        Some(value) => Ok(Reply::Ok { value, repr, equal }),
+        Some(value) => Ok(Reply::Ok { value }),
         None => Err("neither \"ok\" nor \"error\"".into()),
     }
 }
@@ -351,30 +372,43 @@ mod tests {
         };
         assert_eq!(
             call_message(&c, 3, &e),
-            r#"{"op": "call", "fn": "matching_info", "pair": 3, "matches": [[1, 928, 61.400001525878906]], "expected": [[523, 181], [[517, 183]], [61.400001525878906]]}"#
+            r#"{"op": "call", "fn": "matching_info", "pair": 3, "matches": [[1, 928, 61.400001525878906]]}"#
         );
     }
 
     #[test]
     fn replies_and_requests_are_read() {
+        assert_eq!(with_id(7, r#"{"op": "hello"}"#), r#"{"req": 7, "op": "hello"}"#);
+        assert_eq!(parse_reply(r#"{"req": 4, "ok": true}"#, 4).unwrap(), Reply::Ok { value: Json::Bool(true) });
         assert_eq!(
-            parse_reply(r#"{"ok": true}"#).unwrap(),
-            Reply::Ok { value: Json::Bool(true), repr: None, equal: None }
-        );
-        assert_eq!(
-            parse_reply(r#"{"error": "line 3: invalid syntax", "kind": "syntax"}"#).unwrap(),
+            parse_reply(r#"{"error": "line 3: invalid syntax", "kind": "syntax", "req": 1}"#, 1).unwrap(),
             Reply::Error { message: "line 3: invalid syntax".into(), kind: ErrorKind::Syntax }
         );
         assert_eq!(
-            parse_reply(r#"{"error": "no pair 3", "kind": "protocol"}"#).unwrap(),
+            parse_reply(r#"{"req": 2, "error": "no pair 3", "kind": "protocol"}"#, 2).unwrap(),
             Reply::Error { message: "no pair 3".into(), kind: ErrorKind::Protocol }
         );
-        let r = parse_reply(r#"{"ok":[[1,2],[],[]],"repr":"((1, 2), [], [])","equal":false,"output":"hi\n"}"#).unwrap();
-        assert!(matches!(r, Reply::Ok { repr: Some(ref s), equal: Some(false), .. } if s == "((1, 2), [], [])"));
-        assert_eq!(parse_line(r#"{"op":"knn","qid":"1/1","tid":"1/2","k":2}"#).unwrap(), HarnessLine::Knn);
-        assert!(parse_reply("Traceback (most recent call last):").is_err());
-        assert!(parse_reply(r#"{"op": "knn"}"#).is_err());
-        assert!(parse_reply(r#"{"x": 1}"#).is_err());
+        // Fields the harness does not send (a forged "equal") change nothing.
+        let r = parse_reply(r#"{"req":9,"ok":[[1,2],[],[]],"repr":"x","equal":true,"output":"hi\n"}"#, 9).unwrap();
+        assert_eq!(r, Reply::Ok { value: parse("[[1,2],[],[]]").unwrap() });
+        assert_eq!(parse_line(r#"{"op":"knn","qid":"1/1","tid":"1/2","k":2}"#, 3), HarnessLine::Knn);
+        // Stray lines: never a reply, never an error that ends the marking.
+        for (line, why) in [
+            ("Traceback (most recent call last):", "cannot read"),
+            (r#"{"ok": true}"#, "no request id"),
+            (r#"{"req": 5, "ok": true}"#, "request 5, not 6"),
+            (r#"{"req": 6, "x": 1}"#, "neither"),
+            ("{\"req\": 6, \"ok\": [[[[[[[[", "cannot read"),
+        ] {
+            match parse_line(line, 6) {
+                HarnessLine::Stray(w) => assert!(w.contains(why), "{line}: {w}"),
+                other => panic!("{line}: {other:?}"),
+            }
+        }
+        // A student's message: control characters escaped, the length bounded.
+        let long = format!("{{\"req\": 1, \"error\": \"\\u001b[2J{}\", \"kind\": \"runtime\"}}", "x".repeat(5000));
+        let Reply::Error { message, .. } = parse_reply(&long, 1).unwrap() else { panic!() };
+        assert!(message.starts_with("\\x1b[2Jxxx") && message.ends_with("more characters)"), "{message}");
     }
 
     /// A knn answer as (trainIdx, distance) rows, from either form.

@@ -1,0 +1,371 @@
+//! The sandbox `siftlab mark` runs a student's file in (docs/marking.md,
+//! "The sandbox"): bubblewrap with its own PID, network, IPC and UTS
+//! namespaces, nothing of the host visible but the interpreter's own files
+//! (resolved outside first), numpy's package and the harness, read-only; a
+//! private /tmp; an empty environment; an unprivileged uid; limits on
+//! memory, processes, file size and open files. The process tree is
+//! measured here (CPU time, memory) and killed as a whole.
+
+use crate::error::{Error, Result};
+use std::ffi::OsString;
+use std::os::unix::process::CommandExt;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+/// Where the harness lives inside the sandbox.
+pub const BOX: &str = "/box";
+/// The uid the harness takes when siftlab runs as root (RLIMIT_NPROC does
+/// not hold for root): one no account uses.
+pub const MARK_UID: u32 = 61_000;
+
+/// Limits on the whole sandbox.
+pub const MEMORY_BYTES: u64 = 4 << 30;
+const ADDRESS_SPACE: u64 = 16 << 30;
+const PROCESSES: u64 = 64;
+const FILE_BYTES: u64 = 64 << 20;
+const OPEN_FILES: u64 = 256;
+const TMP_BYTES: u64 = 64 << 20;
+
+/// The interpreter, as found outside the sandbox (a pyenv shim resolved
+/// to the real binary).
+#[derive(Clone, Debug)]
+pub struct Python {
+    pub exe: PathBuf,
+    pub version: String,
+    pub numpy: Option<String>,
+    /// numpy's parent folder (put on sys.path in the harness).
+    pub numpy_parent: Option<PathBuf>,
+    /// Read-only binds (source, destination), in order.
+    binds: Vec<(PathBuf, PathBuf)>,
+    /// Folders hidden under an empty tmpfs (site-packages inside the stdlib).
+    hidden: Vec<PathBuf>,
+}
+
+const PROBE: &str = r#"
+import json, os, sys, sysconfig
+out = {"exe": os.path.realpath(sys.executable), "version": sys.version.split()[0],
+       "dirs": [], "numpy": None, "numpy_dir": None, "libs": []}
+paths = sysconfig.get_paths()
+for k in ("stdlib", "platstdlib"):
+    if k in paths and os.path.isdir(paths[k]):
+        out["dirs"].append(os.path.realpath(paths[k]))
+dyn = os.path.join(paths.get("platstdlib", ""), "lib-dynload")
+for p in sys.path:
+    if p.endswith(".zip") and os.path.exists(p):
+        out["dirs"].append(os.path.realpath(p))
+libdir, lib = sysconfig.get_config_var("LIBDIR"), sysconfig.get_config_var("LDLIBRARY")
+if libdir and lib and os.path.exists(os.path.join(libdir, lib)):
+    out["libs"].append(os.path.join(libdir, lib))
+try:
+    import numpy
+    d = os.path.dirname(os.path.realpath(numpy.__file__))
+    out["numpy"], out["numpy_dir"] = numpy.__version__, d
+except Exception:
+    pass
+print(json.dumps(out))
+"#;
+
+impl Python {
+    /// Asks `python` (outside any sandbox: our probe, no student code) where
+    /// its files are, and which shared libraries it and numpy load (ldd).
+    pub fn find(python: &OsString) -> Result<Python> {
+        let shown = python.to_string_lossy().into_owned();
+        let out = Command::new(python).args(["-c", PROBE]).stdin(Stdio::null()).output().map_err(|e| {
+            Error::InvalidArgument(if e.kind() == std::io::ErrorKind::NotFound {
+                format!(
+                    "{shown} not found: siftlab mark runs the student's file with Python 3 (install python3, \
+                     or name one with SIFTLAB_PYTHON=/path/to/python3)"
+                )
+            } else {
+                format!("cannot start {shown}: {e}")
+            })
+        })?;
+        let text = String::from_utf8_lossy(&out.stdout);
+        let v = crate::mark::parse_json(text.trim()).map_err(|_| {
+            Error::InvalidArgument(format!(
+                "{shown} could not describe itself (Python 3.8 or later is needed): {}",
+                crate::mark::escaped(String::from_utf8_lossy(&out.stderr).trim(), 400)
+            ))
+        })?;
+        let s = |k: &str| v.get(k).and_then(|x| x.as_str()).map(str::to_string);
+        let list = |k: &str| -> Vec<PathBuf> {
+            v.get(k).and_then(|x| x.as_arr()).unwrap_or(&[]).iter().filter_map(|x| x.as_str()).map(PathBuf::from).collect()
+        };
+        let exe = PathBuf::from(s("exe").ok_or_else(|| Error::InvalidArgument(format!("{shown}: no executable")))?);
+        let numpy_dir = s("numpy_dir").map(PathBuf::from);
+        let mut binds: Vec<(PathBuf, PathBuf)> = Vec::new();
+        let mut add = |p: &Path| {
+            if let Ok(real) = std::fs::canonicalize(p) {
+                // The path as the loader opens it: the folder resolved, the
+                // name kept (a library's soname is often a symlink).
+                let dest = match (p.parent().and_then(|d| std::fs::canonicalize(d).ok()), p.file_name()) {
+                    (Some(d), Some(n)) => d.join(n),
+                    _ => real.clone(),
+                };
+                for d in [real.clone(), dest] {
+                    if !binds.iter().any(|(_, b)| *b == d) {
+                        binds.push((real.clone(), d));
+                    }
+                }
+            }
+        };
+        add(&exe);
+        let dirs = list("dirs");
+        for d in &dirs {
+            add(d);
+        }
+        let mut hidden = Vec::new();
+        for d in &dirs {
+            for name in ["site-packages", "dist-packages"] {
+                let p = d.join(name);
+                if p.is_dir() {
+                    hidden.push(p);
+                }
+            }
+        }
+        // Shared libraries: the interpreter's, its extension modules' and numpy's.
+        let mut elf = vec![exe.clone()];
+        elf.extend(list("libs"));
+        for d in &dirs {
+            collect_so(&d.join("lib-dynload"), &mut elf, 1);
+        }
+        if let Some(n) = &numpy_dir {
+            collect_so(n, &mut elf, 6);
+            if let Some(libs) = n.parent().map(|p| p.join("numpy.libs")) {
+                collect_so(&libs, &mut elf, 1);
+            }
+        }
+        for lib in list("libs").iter().chain(shared_libraries(&elf).iter()) {
+            add(lib);
+        }
+        if let Some(n) = &numpy_dir {
+            add(n);
+            if let Some(libs) = n.parent().map(|p| p.join("numpy.libs")).filter(|p| p.is_dir()) {
+                add(&libs);
+            }
+        }
+        Ok(Python {
+            exe,
+            version: s("version").unwrap_or_else(|| "?".into()),
+            numpy: s("numpy"),
+            numpy_parent: numpy_dir.as_ref().and_then(|n| n.parent()).map(Path::to_path_buf),
+            binds,
+            hidden,
+        })
+    }
+
+    /// The command that runs `harness_dir/siftlab_harness.py` sandboxed
+    /// (`sandbox`) or as a plain child (`--no-sandbox`), with the limits
+    /// set before it starts.
+    pub fn command(&self, harness_dir: &Path, sandbox: bool) -> Command {
+        let root = is_root();
+        let mut harness_args: Vec<OsString> = vec!["-I".into(), "-S".into(), "-B".into(), "-u".into()];
+        let mut cmd = if sandbox {
+            let mut c = Command::new("bwrap");
+            c.args(["--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try"]);
+            if root {
+                // Root: no user namespace, so the harness can leave uid 0 for
+                // MARK_UID (RLIMIT_NPROC then counts); that needs these two.
+                c.args(["--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]);
+            } else {
+                c.args(["--unshare-user", "--cap-drop", "ALL"]);
+            }
+            c.args(["--die-with-parent", "--new-session", "--clearenv"]);
+            c.args(["--setenv", "OPENBLAS_NUM_THREADS", "1", "--setenv", "OMP_NUM_THREADS", "1"]);
+            for link in ["/lib", "/lib64", "/lib32", "/libx32", "/bin", "/sbin"] {
+                if let Ok(target) = std::fs::read_link(link) {
+                    c.arg("--symlink").arg(target).arg(link);
+                }
+            }
+            for (src, dest) in &self.binds {
+                for parent in parents(dest) {
+                    // Folders on the way (e.g. /root, mode 0700 outside) open to the marking uid.
+                    c.args(["--perms", "0755", "--dir"]).arg(parent);
+                }
+                c.arg("--ro-bind").arg(src).arg(dest);
+                for h in self.hidden.iter().filter(|h| h.starts_with(dest) && **h != *dest) {
+                    // site-packages inside the standard library's folder: hidden.
+                    c.args(["--perms", "0755", "--tmpfs"]).arg(h);
+                }
+            }
+            c.args(["--proc", "/proc", "--dev", "/dev"]);
+            c.args(["--perms", "1777", "--size", &TMP_BYTES.to_string(), "--tmpfs", "/tmp"]);
+            c.arg("--ro-bind").arg(harness_dir).arg(BOX);
+            c.args(["--chdir", "/tmp", "--"]);
+            c.arg(&self.exe);
+            harness_args.push(format!("{BOX}/siftlab_harness.py").into());
+            if root {
+                harness_args.extend(["--drop-uid".into(), MARK_UID.to_string().into()]);
+            }
+            c
+        } else {
+            let mut c = Command::new(&self.exe);
+            c.current_dir(harness_dir).env_clear();
+            c.env("OPENBLAS_NUM_THREADS", "1").env("OMP_NUM_THREADS", "1");
+            harness_args.push(harness_dir.join("siftlab_harness.py").into());
+            c
+        };
+        if let Some(p) = &self.numpy_parent {
+            harness_args.push("--path".into());
+            harness_args.push(p.into());
+        }
+        cmd.args(harness_args);
+        let limit_processes = sandbox;
+        // SAFETY: only async-signal-safe calls (setrlimit, setsid) between
+        // fork and exec.
+        unsafe {
+            cmd.pre_exec(move || {
+                let set = |what, n: u64| {
+                    let r = libc::rlimit { rlim_cur: n as libc::rlim_t, rlim_max: n as libc::rlim_t };
+                    libc::setrlimit(what, &r);
+                };
+                set(libc::RLIMIT_AS, ADDRESS_SPACE);
+                set(libc::RLIMIT_FSIZE, FILE_BYTES);
+                set(libc::RLIMIT_NOFILE, OPEN_FILES);
+                set(libc::RLIMIT_CORE, 0);
+                if limit_processes {
+                    set(libc::RLIMIT_NPROC, PROCESSES);
+                }
+                // Its own session and process group: killed as one even without the sandbox.
+                libc::setsid();
+                Ok(())
+            });
+        }
+        cmd
+    }
+}
+
+/// Whether bubblewrap can build the sandbox here (a real run of `true`
+/// through it); `Err` says why not.
+pub fn check(python: &Python, harness_dir: &Path) -> std::result::Result<(), String> {
+    let mut c = python.command(harness_dir, true);
+    // The same sandbox, running the interpreter's `-c pass` instead of the harness.
+    let args: Vec<OsString> = c.get_args().map(OsString::from).collect();
+    let cut = args.iter().position(|a| a == "--").map_or(args.len(), |i| i + 1);
+    let mut probe = Command::new(c.get_program());
+    probe.args(&args[..cut]).arg(&python.exe).args(["-I", "-S", "-c", "import math, json"]);
+    c = probe;
+    match c.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).output() {
+        Ok(o) if o.status.success() => Ok(()),
+        Ok(o) => Err(crate::mark::escaped(String::from_utf8_lossy(&o.stderr).trim(), 300)),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            Err("bwrap (bubblewrap) is not installed: apt install bubblewrap".into())
+        }
+        Err(e) => Err(format!("cannot run bwrap: {e}")),
+    }
+}
+
+fn is_root() -> bool {
+    // SAFETY: getuid has no preconditions.
+    unsafe { libc::getuid() == 0 }
+}
+
+/// The folders above `p` (not `/`), outermost first.
+fn parents(p: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<PathBuf> = p.ancestors().skip(1).filter(|a| a.parent().is_some()).map(Path::to_path_buf).collect();
+    v.reverse();
+    v
+}
+
+fn collect_so(dir: &Path, out: &mut Vec<PathBuf>, depth: usize) {
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
+    for e in rd.flatten() {
+        let p = e.path();
+        if p.is_dir() && depth > 1 {
+            collect_so(&p, out, depth - 1);
+        } else if p.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.contains(".so")) {
+            out.push(p);
+        }
+    }
+}
+
+/// The libraries `ldd` names for `files` (the dynamic loader included).
+fn shared_libraries(files: &[PathBuf]) -> Vec<PathBuf> {
+    let mut libs: Vec<PathBuf> = Vec::new();
+    for chunk in files.chunks(64) {
+        let Ok(out) = Command::new("ldd").args(chunk).stderr(Stdio::null()).output() else { continue };
+        for line in String::from_utf8_lossy(&out.stdout).lines() {
+            let path = match line.split_once("=>") {
+                Some((_, rest)) => rest.split_whitespace().next(),
+                None => line.split_whitespace().next().filter(|p| p.starts_with('/')),
+            };
+            if let Some(p) = path.filter(|p| p.starts_with('/')) {
+                let p = PathBuf::from(p);
+                if !libs.contains(&p) {
+                    libs.push(p);
+                }
+            }
+        }
+    }
+    libs
+}
+
+/// CPU seconds and resident bytes of a process and all its descendants
+/// (what they have used so far, reaped children included).
+pub fn tree_usage(pid: u32) -> Option<(f64, u64)> {
+    // SAFETY: sysconf has no preconditions.
+    let (tick, page) = unsafe { (libc::sysconf(libc::_SC_CLK_TCK) as f64, libc::sysconf(libc::_SC_PAGESIZE) as u64) };
+    let mut stack = vec![pid];
+    let (mut ticks, mut rss, mut seen) = (0u64, 0u64, 0usize);
+    while let Some(p) = stack.pop() {
+        seen += 1;
+        if seen > 10_000 {
+            break;
+        }
+        let Ok(stat) = std::fs::read_to_string(format!("/proc/{p}/stat")) else { continue };
+        // Fields after the command name, which may hold spaces and ')'.
+        let Some(rest) = stat.rfind(')').map(|i| &stat[i + 2..]) else { continue };
+        let f: Vec<&str> = rest.split_whitespace().collect();
+        // utime, stime, cutime, cstime are fields 14–17 of stat (11–14 here); rss is 24 (21).
+        let n = |i: usize| f.get(i).and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
+        ticks += n(11) + n(12) + n(13) + n(14);
+        rss += n(21) * page;
+        stack.extend(children(p));
+    }
+    (seen > 0).then_some((ticks as f64 / tick, rss))
+}
+
+/// The direct children of `pid`, over all its threads.
+pub fn children(pid: u32) -> Vec<u32> {
+    let mut out = Vec::new();
+    if let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) {
+        for t in tasks.flatten() {
+            if let Ok(c) = std::fs::read_to_string(t.path().join("children")) {
+                out.extend(c.split_whitespace().filter_map(|x| x.parse::<u32>().ok()));
+            }
+        }
+    }
+    out
+}
+
+/// SIGKILL to `pid`, its process group and every descendant.
+pub fn kill_tree(pid: u32) {
+    let mut all = vec![pid];
+    let mut i = 0;
+    while i < all.len() && all.len() < 10_000 {
+        let c = children(all[i]);
+        all.extend(c);
+        i += 1;
+    }
+    for p in all.iter().rev() {
+        // SAFETY: kill has no memory preconditions; a pid that ended is ESRCH.
+        unsafe {
+            libc::kill(*p as libc::pid_t, libc::SIGKILL);
+        }
+    }
+    // SAFETY: as above; the group is the one setsid made for the child.
+    unsafe {
+        libc::kill(-(pid as libc::pid_t), libc::SIGKILL);
+    }
+}
+
+/// CPU seconds the calling thread has used (the knn answers siftlab
+/// computes count towards the call, as OpenCV's knnMatch counts in the lab).
+pub fn thread_cpu() -> f64 {
+    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+    // SAFETY: ts is a valid timespec to write.
+    unsafe {
+        libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts);
+    }
+    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+}
