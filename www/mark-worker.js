@@ -7,6 +7,11 @@
 // answers {type: "markReply", id, line}. A call that runs too long is stopped by the page,
 // which terminates this worker and starts another (Python cannot be interrupted from
 // outside without cross-origin isolation).
+//
+// The page starts this module from a `blob:` URL (`import "<this URL>"`), so the worker runs
+// under the page's Content-Security-Policy (connect-src 'self', no 'unsafe-eval'): whatever
+// JavaScript the student's Python reaches, it cannot fetch from another origin or evaluate
+// code. Relative URLs here resolve against import.meta.url, this file's real address.
 import { loadPyodide } from './pyodide/pyodide.mjs';
 
 const FILES = ['cv2.py', 'vision_tasks_base.py', 'siftlab_harness.py'];
@@ -18,19 +23,28 @@ async function start() {
   const wasm = await import('./pkg/siftlab_worker.js');
   await wasm.default();
   const py = await loadPyodide({
-    indexURL: new URL('./pyodide/', self.location.href).href,
+    indexURL: new URL('./pyodide/', import.meta.url).href,
     // The student's prints are captured by the harness; anything else is a log line.
     stdout: (s) => console.log('[python]', s),
     stderr: (s) => console.warn('[python]', s),
   });
   for (const f of FILES) {
-    const r = await fetch(`./py/${f}`);
+    const r = await fetch(new URL(`./py/${f}`, import.meta.url));
     if (!r.ok) throw new Error(`py/${f}: HTTP ${r.status}`);
     py.FS.writeFile(f, await r.text());
   }
   py.runPython("import sys\nif '.' not in sys.path: sys.path.insert(0, '.')");
   const harness = py.pyimport('siftlab_harness');
   harness.host_knn = (line) => wasm.mark_host_knn(line);
+  // Python starts only now; what it must not use goes first. The CSP already keeps the
+  // network to this origin; these also keep the student's code off this origin's storage,
+  // off nested workers and off the network APIs altogether.
+  for (const name of ['fetch', 'XMLHttpRequest', 'WebSocket', 'WebSocketStream', 'EventSource', 'WebTransport',
+    'importScripts', 'Worker', 'SharedWorker', 'indexedDB', 'caches', 'BroadcastChannel', 'Request',
+    'cookieStore', 'storage']) {
+    try { delete self[name]; } catch (_) { /* not configurable: the CSP still holds */ }
+    if (name in self) { try { Object.defineProperty(self, name, { value: undefined }); } catch (_) { /* idem */ } }
+  }
   return { wasm, harness, ms: performance.now() - t0 };
 }
 

@@ -1,16 +1,16 @@
-//! The page side of "Mark my code": one Pyodide worker (`www/mark-worker.js`)
-//! running the student's file, one request at a time, each with a time limit.
-//! Python cannot be interrupted from outside, so a call over its limit ends
-//! the worker: the caller starts a fresh one (Pyodide comes from
-//! the browser's cache the second time).
+//! The page side of "Mark my code": the browser transport of
+//! `core::mark::Session` (the loop, limits and restarts live there, shared
+//! with `siftlab mark`). One Pyodide worker (`www/mark-worker.js`, started
+//! from a `blob:` URL so the page's CSP binds it) runs the student's file,
+//! one request at a time, each with a time limit (wall time: a page cannot
+//! read a worker's CPU time). Python cannot be interrupted from outside, so
+//! a request over its limit ends the worker; the session then asks for a
+//! fresh one (Pyodide comes from the browser's cache the second time).
 
 use crate::model::lab::Source;
 use crate::protocol::mark::set_pair;
 use crate::worker::MARK_WORKER_NAME;
-use siftlab_core::mark::{
-    call_message, check_source, failed_call, judge, load_message, pair_message, parse_reply, plan, reference,
-    CaseResult, Diagnosis, Marks, Pair, Rejection, Reply,
-};
+use siftlab_core::mark::{check_source, Limits, Marks, Outcome, Pair, Pairs, Session, Step};
 use std::cell::Cell;
 use std::cell::RefCell;
 use std::collections::HashMap;
@@ -32,8 +32,12 @@ type Resolver = (js_sys::Function, js_sys::Function);
 #[derive(Default)]
 struct State {
     next: u32,
-    pending: HashMap<u32, Resolver>,
+    /// Each pending request's resolver and the session's request id its
+    /// reply line must carry.
+    pending: HashMap<u32, (Resolver, u64)>,
     ready: Option<Resolver>,
+    /// Messages that were no reply (forged by the student's code, or late).
+    stray: usize,
 }
 
 /// One running mark worker.
@@ -74,7 +78,7 @@ impl MarkWorker {
         let opts = web_sys::WorkerOptions::new();
         opts.set_type(web_sys::WorkerType::Module);
         opts.set_name(MARK_WORKER_NAME);
-        let worker = web_sys::Worker::new_with_options("mark-worker.js", &opts)
+        let worker = web_sys::Worker::new_with_options(&blob_url()?, &opts)
             .map_err(|e| Failure::Crashed(format!("cannot start the marking worker: {}", js_err(e))))?;
         let state: Rc<RefCell<State>> = Rc::default();
         let (ready, resolver) = promise();
@@ -95,9 +99,19 @@ impl MarkWorker {
                     }
                 }
                 Some("markReply") => {
+                    // The student's code shares the worker and can post
+                    // messages of its own: only the reply line to the
+                    // pending request (its session id inside) settles it.
                     let id = get("id").as_f64().unwrap_or(-1.0) as u32;
-                    if let Some((res, _)) = st.borrow_mut().pending.remove(&id) {
-                        let _ = res.call1(&JsValue::NULL, &get("line"));
+                    let line = get("line").as_string().unwrap_or_default();
+                    let mut s = st.borrow_mut();
+                    match s.pending.get(&id) {
+                        Some((_, req)) if Session::is_reply(&line, *req) => {
+                            if let Some(((res, _), _)) = s.pending.remove(&id) {
+                                let _ = res.call1(&JsValue::NULL, &JsValue::from_str(&line));
+                            }
+                        }
+                        _ => s.stray += 1,
                     }
                 }
                 _ => {}
@@ -111,7 +125,7 @@ impl MarkWorker {
             });
             let msg: JsValue = format!("the marking worker stopped: {}", msg.unwrap_or_default()).into();
             let mut s = st.borrow_mut();
-            for (_, (_, rej)) in s.pending.drain() {
+            for (_, ((_, rej), _)) in s.pending.drain() {
                 let _ = rej.call1(&JsValue::NULL, &msg);
             }
             if let Some((_, rej)) = s.ready.take() {
@@ -136,22 +150,24 @@ impl MarkWorker {
         }
     }
 
-    /// Sends one request (`op`: the protocol's op, the worker keeps pairs
-    /// for its matcher) and waits at most `ms` for the reply line. Over the
-    /// limit the worker is terminated: start another.
-    pub async fn request(&self, op: &str, line: &str, ms: i32) -> Result<String, Failure> {
-        self.request_with(js_sys::Object::new(), op, line, ms).await
-    }
-
-    /// [`MarkWorker::request`] with more fields in the message (a pair's
-    /// features for the worker's matcher: `protocol::mark::set_pair`).
-    pub async fn request_with(&self, msg: js_sys::Object, op: &str, line: &str, ms: i32) -> Result<String, Failure> {
+    /// Sends request `req` of the session (`op`: the protocol's op; `msg`
+    /// may carry a pair's features for the worker's matcher:
+    /// `protocol::mark::set_pair`) and waits at most `ms` for its reply
+    /// line. Over the limit the worker is terminated: start another.
+    pub async fn request_with(
+        &self,
+        msg: js_sys::Object,
+        op: &str,
+        line: &str,
+        req: u64,
+        ms: i32,
+    ) -> Result<String, Failure> {
         let (p, (res, rej)) = promise();
         let id = {
             let mut s = self.state.borrow_mut();
             s.next += 1;
             let id = s.next;
-            s.pending.insert(id, (res, rej.clone()));
+            s.pending.insert(id, ((res, rej.clone()), req));
             id
         };
         let set = |k: &str, v: JsValue| js_sys::Reflect::set(&msg, &k.into(), &v);
@@ -197,27 +213,25 @@ async fn features_of(bytes: Vec<u8>) -> Result<siftlab_core::sift::Features, Str
     r.unwrap_or_else(|| Err("SIFT did not answer".into()))
 }
 
-/// Starts a worker and loads the student's file in it: `Err` is the file's
-/// rejection (it scores 0) or why Python could not run at all.
-async fn start_loaded(text: &str, progress: &dyn Fn(String)) -> Result<MarkWorker, Result<Rejection, String>> {
-    use crate::model::mark::{CALL_LIMIT_MS, START_LIMIT_MS};
-    progress("starting Python (Pyodide: about 12 MB the first time, then from the browser's cache)".into());
-    let (w, ms) = MarkWorker::start(START_LIMIT_MS).await.map_err(|e| match e {
-        Failure::Crashed(m) => Err(m),
-        Failure::Timeout => Err("Python did not start in time".to_string()),
-    })?;
-    LAST_START_MS.with(|c| c.set(ms));
-    progress(format!("Python ready in {:.1} s; loading your file", ms / 1000.0));
-    let t0 = crate::platform::now_ms();
-    match w.request("load", &load_message(text), CALL_LIMIT_MS).await {
-        Ok(line) => match parse_reply(&line) {
-            Ok(Reply::Error { message, kind }) => Err(Ok(Rejection::Load { kind, message })),
-            Ok(_) => Ok(w),
-            Err(e) => Err(Err(format!("the harness answered {line:?}: {e}"))),
-        },
-        Err(Failure::Timeout) => Err(Ok(Rejection::LoadTimeout { seconds: (crate::platform::now_ms() - t0) / 1000.0 })),
-        Err(Failure::Crashed(m)) => Err(Err(m)),
-    }
+/// The worker's script behind a `blob:` URL. A worker loaded from a URL
+/// gets the policy of that response's headers (none from a static server),
+/// a `blob:` worker inherits the page's CSP (`connect-src 'self'`, no
+/// `unsafe-eval`): the student's Python then cannot reach another origin
+/// through any JavaScript it finds. The blob imports the real script by
+/// its absolute URL; that module runs in the blob worker's scope.
+fn blob_url() -> Result<String, Failure> {
+    let href = web_sys::window()
+        .and_then(|w| w.location().href().ok())
+        .ok_or_else(|| Failure::Crashed("no page location".into()))?;
+    let url = web_sys::Url::new_with_base("mark-worker.js", &href)
+        .map_err(|e| Failure::Crashed(format!("mark-worker.js: {}", js_err(e))))?;
+    let parts = js_sys::Array::of1(&JsValue::from_str(&format!("import {:?};\n", url.href())));
+    let bag = web_sys::BlobPropertyBag::new();
+    bag.set_type("text/javascript");
+    let blob = web_sys::Blob::new_with_str_sequence_and_options(&parts, &bag)
+        .map_err(|e| Failure::Crashed(format!("cannot build the worker's blob: {}", js_err(e))))?;
+    web_sys::Url::create_object_url_with_blob(&blob)
+        .map_err(|e| Failure::Crashed(format!("cannot build the worker's URL: {}", js_err(e))))
 }
 
 thread_local! {
@@ -241,6 +255,18 @@ pub struct Timing {
     pub calls_ms: f64,
 }
 
+/// The frames' features, computed before the marking starts.
+struct Features(Vec<Pair>);
+
+impl Pairs for Features {
+    fn pair(&mut self, frame: u32) -> siftlab_core::Result<&Pair> {
+        self.0
+            .iter()
+            .find(|p| p.id == frame)
+            .ok_or_else(|| siftlab_core::Error::InvalidArgument(format!("frame pair {frame} was not computed")))
+    }
+}
+
 /// Marks `bytes` (the student's file) as the lab's automarker does, on
 /// `source`'s frame pairs: the cases of `seed`, `n` per task. `Err` only when
 /// the marking itself could not run (no pairs, SIFT or Python failing).
@@ -251,7 +277,7 @@ pub async fn run(
     source: Source,
     progress: impl Fn(String),
 ) -> Result<(Marks, Timing), String> {
-    use crate::model::mark::{CALL_LIMIT_MS, TASK_LIMIT_MS};
+    use crate::model::mark::START_LIMIT_MS;
     use crate::platform::now_ms;
     use std::collections::{BTreeMap, BTreeSet};
     let mut timing = Timing { sift_ms: 0.0, start_ms: 0.0, calls_ms: 0.0 };
@@ -264,9 +290,9 @@ pub async fn run(
     if frames.is_empty() {
         return Err("marking needs frame pairs: load the demo or a MyKITTI folder".into());
     }
-    let cases = plan(seed, n, &frames);
+    let mut session = Session::new(&text, seed, n, &frames, Limits::default());
     // SIFT of every frame the cases use, once each (the pool's workers in parallel).
-    let needed: BTreeSet<u32> = cases.iter().flat_map(|c| [c.frame() - 1, c.frame()]).collect();
+    let needed: BTreeSet<u32> = session.cases().iter().flat_map(|c| [c.frame() - 1, c.frame()]).collect();
     let t0 = now_ms();
     let mut features = BTreeMap::new();
     for (k, &id) in needed.iter().enumerate() {
@@ -274,77 +300,63 @@ pub async fn run(
         let b = super::loading::frame_bytes(&source, id).await?;
         features.insert(id, features_of(b).await.map_err(|e| format!("frame {id}: {e}"))?);
     }
+    let used: BTreeSet<u32> = session.cases().iter().map(|c| c.frame()).collect();
+    let mut pairs = Features(
+        used.iter().map(|&f| Pair { id: f, prev: features[&(f - 1)].clone(), cur: features[&f].clone() }).collect(),
+    );
+    drop(features);
     timing.sift_ms = now_ms() - t0;
     let t0 = now_ms();
-    let mut worker = match start_loaded(&text, &progress).await {
-        Ok(w) => w,
-        Err(Ok(rejection)) => return Ok((Marks::rejected(seed, n, rejection), timing)),
-        Err(Err(e)) => return Err(e),
+    let total = session.cases().len();
+    let mut worker: Option<MarkWorker> = None;
+    let marks = loop {
+        match session.next(&mut pairs).map_err(|e| e.to_string())? {
+            Step::Start => {
+                if worker.take().is_some() {
+                    progress("the call was stopped: restarting Python".into());
+                } else {
+                    progress("starting Python (Pyodide: about 12 MB the first time, then from the browser's cache)".into());
+                }
+                let (w, ms) = MarkWorker::start(START_LIMIT_MS).await.map_err(|e| match e {
+                    Failure::Crashed(m) => m,
+                    Failure::Timeout => "Python did not start in time".to_string(),
+                })?;
+                if timing.start_ms == 0.0 {
+                    timing.start_ms = ms;
+                }
+                LAST_START_MS.with(|c| c.set(ms));
+                worker = Some(w);
+                session.started();
+            }
+            Step::Send { id, line, limit, op, pair } => {
+                let Some(w) = worker.as_ref() else {
+                    return Err("no marking worker is running".into());
+                };
+                if let Some(case) = session.current().filter(|_| op == "call") {
+                    let k = session.results().len() + 1;
+                    progress(format!("{} · call {k} of {total}", case.call_text()));
+                }
+                let msg = js_sys::Object::new();
+                if let Some(p) = pair.and_then(|f| pairs.0.iter().find(|p| p.id == f)) {
+                    set_pair(&msg, p);
+                }
+                let c0 = now_ms();
+                let reply = w.request_with(msg, op, &line, id, (limit * 1000.0).ceil() as i32).await;
+                let secs = (now_ms() - c0) / 1000.0;
+                let outcome = match reply {
+                    Ok(line) => Outcome::Reply(line, secs),
+                    Err(Failure::Timeout) => Outcome::Timeout(secs),
+                    Err(Failure::Crashed(m)) => Outcome::Crashed(m, secs),
+                };
+                if !matches!(outcome, Outcome::Reply(..)) {
+                    drop(worker.take());
+                }
+                session.outcome(outcome, &mut pairs).map_err(|e| e.to_string())?;
+            }
+            Step::Done(marks) => break marks,
+        }
     };
-    timing.start_ms = last_start_ms();
-    let mut sent = BTreeSet::new();
-    let mut results: Vec<CaseResult> = Vec::with_capacity(cases.len());
-    let mut task_ms: BTreeMap<&'static str, f64> = BTreeMap::new();
-    for (k, case) in cases.iter().enumerate() {
-        let f = case.frame();
-        let (prev, cur) = (&features[&(f - 1)], &features[&f]);
-        let expected = reference(case, prev, cur).map_err(|e| e.to_string())?;
-        let task = case.task().name();
-        let used = task_ms.get(task).copied().unwrap_or(0.0);
-        if used > TASK_LIMIT_MS {
-            results.push(failed_call(case, &expected, Diagnosis::TaskTimeLimit { seconds: used / 1000.0 }, 0.0));
-            continue;
-        }
-        progress(format!("{} · call {} of {}", case.call_text(), k + 1, cases.len()));
-        if sent.insert(f) {
-            let msg = js_sys::Object::new();
-            set_pair(&msg, &Pair { id: f, prev: prev.clone(), cur: cur.clone() });
-            if let Err(e) = worker.request_with(msg, "pair", &pair_message(f, prev, cur), CALL_LIMIT_MS).await {
-                return Err(format!("sending frames {} and {f} to Python: {e:?}", f - 1));
-            }
-        }
-        let c0 = now_ms();
-        let reply = worker.request("call", &call_message(case, f, &expected), CALL_LIMIT_MS).await;
-        let secs = (now_ms() - c0) / 1000.0;
-        *task_ms.entry(task).or_default() += secs * 1000.0;
-        let restart = match reply {
-            Ok(line) => match parse_reply(&line) {
-                Ok(r) => {
-                    results.push(judge(case, &expected, &r, prev, cur, secs));
-                    false
-                }
-                Err(e) => {
-                    results.push(failed_call(case, &expected, Diagnosis::Crashed(e.to_string()), secs));
-                    true
-                }
-            },
-            Err(Failure::Timeout) => {
-                results.push(failed_call(
-                    case,
-                    &expected,
-                    Diagnosis::Timeout { seconds: CALL_LIMIT_MS as f64 / 1000.0 },
-                    secs,
-                ));
-                true
-            }
-            Err(Failure::Crashed(m)) => {
-                results.push(failed_call(case, &expected, Diagnosis::Crashed(m), secs));
-                true
-            }
-        };
-        if restart {
-            // A fresh Python with the file loaded again; the pairs go again when used.
-            drop(worker);
-            sent.clear();
-            progress("the call was stopped: restarting Python".into());
-            worker = match start_loaded(&text, &progress).await {
-                Ok(w) => w,
-                Err(Ok(r)) => return Ok((Marks::rejected(seed, n, r), timing)),
-                Err(Err(e)) => return Err(e),
-            };
-        }
-    }
     drop(worker);
     timing.calls_ms = now_ms() - t0;
-    Ok((Marks::new(seed, n, results), timing))
+    Ok((marks, timing))
 }

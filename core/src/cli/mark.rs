@@ -193,7 +193,7 @@ impl Runner {
                     harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox)?);
                     session.started();
                 }
-                Step::Send { id, line, limit } => {
+                Step::Send { id, line, limit, .. } => {
                     let Some(h) = harness.as_mut() else {
                         return Err(Error::InvalidArgument("no harness is running".into()));
                     };

@@ -11,7 +11,7 @@
 //! loop {
 //!     match s.next(&mut pairs)? {
 //!         Step::Start => { /* kill any harness, start a fresh one */ }
-//!         Step::Send { id, line, limit } => { /* send; wait for the reply to id */ s.outcome(o) }
+//!         Step::Send { id, line, limit, .. } => { /* send; wait for the reply to id */ s.outcome(o) }
 //!         Step::Done(marks) => break,
 //!     }
 //! }
@@ -62,7 +62,7 @@ pub enum Step {
     /// the end with [`Session::outcome`]: the reply, or a time-out once the
     /// request has used `limit` seconds (or `limit` × `wall_factor` of wall
     /// time), or a crash.
-    Send { id: u64, line: String, limit: f64 },
+    Send { id: u64, line: String, limit: f64, op: &'static str, pair: Option<u32> },
     /// The marking is over.
     Done(Marks),
 }
@@ -182,7 +182,12 @@ impl Session {
     fn send(&mut self, message: &str, limit: f64, waiting: Waiting) -> Step {
         self.request += 1;
         self.waiting = waiting;
-        Step::Send { id: self.request, line: with_id(self.request, message), limit }
+        let (op, pair) = match waiting {
+            Waiting::Load => ("load", None),
+            Waiting::Pair(f) => ("pair", Some(f)),
+            _ => ("call", None),
+        };
+        Step::Send { id: self.request, line: with_id(self.request, message), limit, op, pair }
     }
 
     /// What to do next.
