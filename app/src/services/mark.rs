@@ -315,7 +315,9 @@ pub async fn run(
                 if worker.take().is_some() {
                     progress("the call was stopped: restarting Python".into());
                 } else {
-                    progress("starting Python (Pyodide: about 12 MB the first time, then from the browser's cache)".into());
+                    progress(
+                        "starting Python (Pyodide: about 12 MB the first time, then from the browser's cache)".into(),
+                    );
                 }
                 let (w, ms) = MarkWorker::start(START_LIMIT_MS).await.map_err(|e| match e {
                     Failure::Crashed(m) => m,

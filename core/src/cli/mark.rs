@@ -14,8 +14,8 @@ use super::sandbox::{self, Python};
 use crate::dataset::Dataset;
 use crate::error::{Error, Result};
 use crate::mark::{
-    check_source, escaped, knn_answer, parse_line, report_json, report_text, HarnessLine, Limits, Marks, Outcome,
-    Pair, Pairs, Session, Status, Step, Task, MAX_LINE_BYTES,
+    check_source, escaped, knn_answer, parse_line, report_json, report_text, HarnessLine, Limits, Marks, Outcome, Pair,
+    Pairs, Session, Status, Step, Task, MAX_LINE_BYTES,
 };
 use crate::sift::{detect_and_compute, Features, SiftParams};
 use std::collections::HashMap;
@@ -207,8 +207,14 @@ impl Runner {
                     if let Some(h) = harness.take() {
                         h.close();
                     }
+                    if let Some(r) = &marks.rejection {
+                        eprintln!("siftlab: the file scores 0: {r}");
+                    }
                     if session.stray_lines > 0 {
-                        eprintln!("siftlab: {} line(s) from the file's process were no reply and were dropped", session.stray_lines);
+                        eprintln!(
+                            "siftlab: {} line(s) from the file's process were no reply and were dropped",
+                            session.stray_lines
+                        );
                     }
                     return Ok(marks);
                 }

@@ -7,8 +7,8 @@ pub mod anatomy;
 pub mod args;
 pub mod common;
 pub mod mark;
-mod sandbox;
 pub mod match_all;
+mod sandbox;
 pub mod trajectory;
 pub mod visual;
 

@@ -89,7 +89,13 @@ impl Python {
         })?;
         let s = |k: &str| v.get(k).and_then(|x| x.as_str()).map(str::to_string);
         let list = |k: &str| -> Vec<PathBuf> {
-            v.get(k).and_then(|x| x.as_arr()).unwrap_or(&[]).iter().filter_map(|x| x.as_str()).map(PathBuf::from).collect()
+            v.get(k)
+                .and_then(|x| x.as_arr())
+                .unwrap_or(&[])
+                .iter()
+                .filter_map(|x| x.as_str())
+                .map(PathBuf::from)
+                .collect()
         };
         let exe = PathBuf::from(s("exe").ok_or_else(|| Error::InvalidArgument(format!("{shown}: no executable")))?);
         let numpy_dir = s("numpy_dir").map(PathBuf::from);

@@ -4,8 +4,8 @@
 //! order, a threshold ignored, the empty case, …).
 
 use super::cases::Case;
-use super::json::Json;
 use super::escape::escaped;
+use super::json::Json;
 use super::protocol::{ErrorKind, Reply};
 use super::pyvalue::{info_type_problem, info_value, PyValue};
 use super::reference::{
@@ -626,7 +626,7 @@ mod tests {
                 format!("[{}]", ms.join(", "))
             })
             .collect();
-        Reply::Ok { value: parse(&format!("[{}]", rows.join(", "))).unwrap(), repr: None, equal: None }
+        Reply::Ok { value: parse(&format!("[{}]", rows.join(", "))).unwrap() }
     }
 
     fn f32_text(m: &DMatch) -> String {
@@ -697,8 +697,7 @@ mod tests {
             assert_eq!(r.diagnosis.unwrap().code(), "not_float32");
         }
         // A type problem is an error.
-        let r =
-            judge(&dt, &e, &Reply::Ok { value: parse("[1, 2]").unwrap() }, &p.0, &p.1, 0.0);
+        let r = judge(&dt, &e, &Reply::Ok { value: parse("[1, 2]").unwrap() }, &p.0, &p.1, 0.0);
         assert_eq!((r.status, r.diagnosis.unwrap().code()), (Status::Error, "wrong_type"));
         let r = judge(
             &nn_none,
@@ -748,14 +747,7 @@ mod tests {
         let empty = Case::Info { frame: 1, strategy: Strategy::Dt(0.0), feature: 3 };
         let e0 = reference(&empty, &p.0, &p.1).unwrap();
         assert!(e0.info_matches().is_empty());
-        let r = judge(
-            &empty,
-            &e0,
-            &Reply::Ok { value: typed("[[0, 0], [], []]") },
-            &p.0,
-            &p.1,
-            0.0,
-        );
+        let r = judge(&empty, &e0, &Reply::Ok { value: typed("[[0, 0], [], []]") }, &p.0, &p.1, 0.0);
         assert_eq!(r.status, Status::Correct);
         let r = judge(
             &empty,
@@ -766,23 +758,9 @@ mod tests {
             0.0,
         );
         assert_eq!((r.status, r.diagnosis.unwrap().code()), (Status::Error, "empty_case"));
-        let r = judge(
-            &empty,
-            &e0,
-            &Reply::Ok { value: typed("[null, [], []]") },
-            &p.0,
-            &p.1,
-            0.0,
-        );
+        let r = judge(&empty, &e0, &Reply::Ok { value: typed("[null, [], []]") }, &p.0, &p.1, 0.0);
         assert_eq!(r.diagnosis.unwrap().code(), "wrong_type");
-        let r = judge(
-            &empty,
-            &e0,
-            &Reply::Ok { value: typed("[[1, 0], [], []]") },
-            &p.0,
-            &p.1,
-            0.0,
-        );
+        let r = judge(&empty, &e0, &Reply::Ok { value: typed("[[1, 0], [], []]") }, &p.0, &p.1, 0.0);
         assert_eq!((r.status, r.diagnosis.unwrap().code()), (Status::Wrong, "empty_case"));
     }
 
@@ -803,7 +781,7 @@ mod tests {
             (Json::Arr(a), 0) if a.len() == 3 => Json::Obj(vec![(
                 "tuple".into(),
                 Json::Arr(vec![
-                    typed_with(&a[0], 2, points_as_lists),
+                    typed_with(&a[0], 3, points_as_lists),
                     tag("list", a[1].as_arr().unwrap_or(&[]), 2),
                     tag("list", a[2].as_arr().unwrap_or(&[]), 3),
                 ]),

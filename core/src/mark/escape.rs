@@ -49,7 +49,10 @@ mod tests {
 
     #[test]
     fn controls_are_shown_not_obeyed() {
-        assert_eq!(escaped("\x1b[2J\x1b[Hvision_tasks.py: 20.00 / 20\n", 100), "\\x1b[2J\\x1b[Hvision_tasks.py: 20.00 / 20\\n");
+        assert_eq!(
+            escaped("\x1b[2J\x1b[Hvision_tasks.py: 20.00 / 20\n", 100),
+            "\\x1b[2J\\x1b[Hvision_tasks.py: 20.00 / 20\\n"
+        );
         assert_eq!(escaped("a\u{202e}b\u{9b}c\r", 100), "a\\u202eb\\u009bc\\r");
         assert_eq!(escaped("héllo wörld", 5), "héllo … (6 more characters)");
         assert!(is_clean("line one\nline two é") && !is_clean("x\x07") && !is_clean("\u{200b}"));

@@ -33,14 +33,14 @@ mod source;
 pub use b64::{base64, unbase64};
 pub use cases::{plan, threshold_text, Case, Task, DEFAULT_CASES, NUM_FEATURES};
 pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Status};
-pub use json::{parse as parse_json, Json};
 pub use escape::{escaped, is_clean};
+pub use json::{parse as parse_json, Json};
 pub use protocol::{
-    call_message, knn_answer, load_message, pair_message, parse_line, parse_reply, with_id, ErrorKind, HarnessLine, Pair,
-    Reply, MAX_LINE_BYTES, MAX_MESSAGE_CHARS,
+    call_message, knn_answer, load_message, pair_message, parse_line, parse_reply, with_id, ErrorKind, HarnessLine,
+    Pair, Reply, MAX_LINE_BYTES, MAX_MESSAGE_CHARS,
 };
 pub use pyvalue::{info_type_problem, info_value, PyValue};
-pub use session::{Limits, Outcome, Pairs, Session, Step};
 pub use reference::{reference, Expected};
 pub use report::{report_json, report_text, Marks, TaskMarks};
+pub use session::{Limits, Outcome, Pairs, Session, Step};
 pub use source::{check_source, Rejection, MAX_SOURCE_BYTES};

@@ -119,9 +119,7 @@ impl PyValue {
         match (a, b) {
             (None, None) => true,
             (Str(x), Str(y)) => x == y,
-            (Tuple(x), Tuple(y)) | (List(x), List(y)) => {
-                x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.py_eq(q))
-            }
+            (Tuple(x), Tuple(y)) | (List(x), List(y)) => x.len() == y.len() && x.iter().zip(y).all(|(p, q)| p.py_eq(q)),
             _ => false,
         }
     }
@@ -286,7 +284,11 @@ pub fn info_type_problem(v: &PyValue) -> Option<String> {
             parts.len()
         ));
     }
-    let named = [("the feature's coordinates", "tuple"), ("the matches' coordinates", "list"), ("the matches' distances", "list")];
+    let named = [
+        ("the feature's coordinates", "tuple"),
+        ("the matches' coordinates", "list"),
+        ("the matches' distances", "list"),
+    ];
     for (part, (what, want)) in parts.iter().zip(named) {
         let ok = matches!((part, want), (PyValue::Tuple(_), "tuple") | (PyValue::List(_), "list"));
         if !ok {
@@ -340,7 +342,9 @@ mod tests {
         let info = MatchInfo { query: (523, 181), points: vec![(517, 183)], distances: vec![61.4] };
         let want = info_value(&info);
         assert_eq!(want.py_repr(), "((523, 181), [(517, 183)], [61.400001525878906])");
-        let got = v(r#"{"tuple": [{"tuple": [523, 181]}, {"list": [{"tuple": [517, 183.0]}]}, {"list": [61.400001525878906]}]}"#);
+        let got = v(
+            r#"{"tuple": [{"tuple": [523, 181]}, {"list": [{"tuple": [517, 183.0]}]}, {"list": [61.400001525878906]}]}"#,
+        );
         assert!(got.py_eq(&want) && info_type_problem(&got).is_none());
         let sub = v(r#"{"tuple": [{"tuple": [523, 181], "sub": "P"}, {"list": []}, {"list": []}]}"#);
         assert_eq!(info_type_problem(&sub).unwrap(), "matching_info: the feature's coordinates must be a tuple, got P");

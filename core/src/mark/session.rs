@@ -301,7 +301,9 @@ impl Session {
                         return Ok(());
                     }
                     (Outcome::Timeout(_), _) => Diagnosis::Timeout { seconds: self.limits.load },
-                    (_, Some(Reply::Error { message, .. })) => crash(&format!("the file failed to load again: {message}")),
+                    (_, Some(Reply::Error { message, .. })) => {
+                        crash(&format!("the file failed to load again: {message}"))
+                    }
                     (Outcome::Crashed(why, _), _) => crash(&format!("while loading the file: {why}")),
                     (Outcome::Reply(..), None) => crash("the harness's reply to loading the file was unreadable"),
                 };
@@ -321,7 +323,9 @@ impl Session {
                     let d = match (o, r) {
                         (Outcome::Timeout(_), _) => Diagnosis::Timeout { seconds: self.limits.pair },
                         (Outcome::Crashed(why, _), _) => crash(why),
-                        (_, Some(Reply::Error { message, .. })) => crash(&format!("the harness refused the frames: {message}")),
+                        (_, Some(Reply::Error { message, .. })) => {
+                            crash(&format!("the harness refused the frames: {message}"))
+                        }
                         _ => crash("the harness's reply to the frames was unreadable"),
                     };
                     self.restart();
@@ -378,8 +382,10 @@ mod tests {
         fn pair(&mut self, frame: u32) -> Result<&Pair> {
             if !self.0.iter().any(|p| p.id == frame) {
                 let f = |seed: usize| Features {
-                    keypoints: vec![KeyPoint { x: 5.0, y: 7.0, size: 2.0, angle: 0.0, response: 0.1, octave: 0 }; 4],
-                    descriptors: (0..4).map(|i| std::array::from_fn(|j| ((i * 31 + j * 7 + seed) % 200) as u8)).collect(),
+                    keypoints: vec![KeyPoint { x: 5.0, y: 7.0, size: 2.0, angle: 0.0, response: 0.1, octave: 0 }; 1500],
+                    descriptors: (0..1500)
+                        .map(|i| std::array::from_fn(|j| ((i * 31 + j * 7 + seed) % 200) as u8))
+                        .collect(),
                 };
                 self.0.push(Pair { id: frame, prev: f(frame as usize), cur: f(frame as usize + 3) });
             }
@@ -453,7 +459,12 @@ mod tests {
             }
         });
         // dt: 10 s (time-out) + 8 s (reload) + 10 s: over 25 s, no third call.
-        let dt: Vec<_> = m.results.iter().filter(|r| r.case.task() == Task::Dt).map(|r| r.diagnosis.as_ref().map(|d| d.code())).collect();
+        let dt: Vec<_> = m
+            .results
+            .iter()
+            .filter(|r| r.case.task() == Task::Dt)
+            .map(|r| r.diagnosis.as_ref().map(|d| d.code()))
+            .collect();
         assert_eq!(dt, [Some("timeout"), Some("timeout")]);
         assert!(m.tasks.iter().all(|t| t.calls == 2));
     }
@@ -461,7 +472,10 @@ mod tests {
     #[test]
     fn a_first_load_that_fails_rejects_the_file() {
         let (m, _, sends) = drive(Limits::default(), |_, id| {
-            Outcome::Reply(format!("{{\"req\": {id}, \"error\": \"No module named 'yaml'\", \"kind\": \"import\"}}"), 0.1)
+            Outcome::Reply(
+                format!("{{\"req\": {id}, \"error\": \"No module named 'yaml'\", \"kind\": \"import\"}}"),
+                0.1,
+            )
         });
         assert_eq!(m.rejection.as_ref().map(|r| r.code()), Some("import"));
         assert_eq!(sends, 1);
