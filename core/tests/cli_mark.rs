@@ -423,3 +423,49 @@ fn rows(answer: &str) -> Vec<Vec<(i64, f32)>> {
     let d: Vec<f32> = d.chunks(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
     t.chunks(kk).zip(d.chunks(kk)).map(|(t, d)| t.iter().copied().zip(d.iter().copied()).collect()).collect()
 }
+
+/// `--no-sandbox` runs the file as a plain child and says so; without
+/// bubblewrap the marker refuses (exit 2) and names the way out.
+#[test]
+fn the_sandbox_is_required_unless_waived() {
+    let (o, _) = mark_with(&fixture("good"), &["-n", "1", "--no-sandbox"], &[]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--no-sandbox: the file runs with your own rights"), "{}", stderr(&o));
+    assert!(stderr(&o).contains("NOT sandboxed"), "{}", stderr(&o));
+    let (o, _) = mark_with(&fixture("good"), &["-n", "1"], &[]);
+    assert!(stderr(&o).contains("sandboxed (bubblewrap)"), "{}", stderr(&o));
+    // No bwrap on the PATH (python3 named by its own path): refused, nothing run.
+    let probe = Command::new("python3")
+        .args(["-c", "import os, sys; print(os.path.realpath(sys.executable))"])
+        .output()
+        .expect("python3");
+    let python = String::from_utf8_lossy(&probe.stdout).trim().to_string();
+    let empty = std::env::temp_dir().join(format!("siftlab-no-bwrap-{}", std::process::id()));
+    fs::create_dir_all(&empty).unwrap();
+    let (o, _) = mark_with(
+        &fixture("good"),
+        &["-n", "1"],
+        &[("PATH", empty.to_str().unwrap()), ("SIFTLAB_PYTHON", &python)],
+    );
+    assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+    for w in ["no usable sandbox", "bubblewrap", "--no-sandbox"] {
+        assert!(stderr(&o).contains(w), "lacks {w:?}: {}", stderr(&o));
+    }
+    assert!(stdout(&o).is_empty(), "{}", stdout(&o));
+}
+
+/// A file whose matching_info returns objects that always say "equal"
+/// (and patches the harness) earns nothing for it: the verdict is made
+/// outside its interpreter. Its honest tasks keep their marks.
+#[test]
+fn forged_equality_earns_nothing() {
+    let hostile = repo_root().join("tests/fixtures/mark/hostile");
+    for name in ["always_equal", "patch_expected", "wrap_handle", "steal_expected", "shadow_bool"] {
+        let o = mark(&hostile.join(name).join("vision_tasks.py"), &["-n", "2", "--seed", "92", "--json"]);
+        let r = report(&o);
+        let t = table(&r);
+        assert_eq!(t[..3], [(2, 0, 5.0), (2, 0, 5.0), (2, 0, 5.0)], "{name}: {}", stdout(&o));
+        assert_eq!(t[3].0, 0, "{name}: matching_info counted correct: {}", stdout(&o));
+        assert!(num(&r, "total") <= 15.5, "{name}");
+    }
+}

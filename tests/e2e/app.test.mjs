@@ -885,6 +885,36 @@ test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI 
   await page.elementScreenshot(tid('mark'), shot('mark-nndr-inverted.png'));
 });
 
+// Hostile files in the browser (tests/fixtures/mark/hostile): the worker runs under the page's
+// CSP, so nothing reaches another origin (a listener on 127.0.0.1:47011 counts connections);
+// forged replies posted to the page and objects that always say "equal" change no mark; a
+// crash (os._exit) and stray output end no marking. The table is the CLI's.
+test('mark my code: hostile files: no connection, no forged mark, the CLI\'s table', async () => {
+  const net = await import('node:net');
+  let connections = 0;
+  const server = net.createServer((s) => { connections += 1; s.destroy(); });
+  await new Promise((ok, fail) => { server.once('error', fail); server.listen(47011, '127.0.0.1', ok); });
+  try {
+    for (const variant of ['hostile/browser_escape', 'hostile/always_equal', 'hostile/wrap_handle', 'hostile/ansi_escapes']) {
+      await markFile(variant, MARK_N, 2);
+      const got = await pageMarks();
+      const cli = cliMarks(cliMark(variant, MARK_N, 2));
+      assert.deepEqual(got.rows, cli.rows, variant);
+      assert.equal(got.total, cli.total, variant);
+      if (variant !== 'hostile/ansi_escapes') assert.deepEqual(got.diagnoses, cli.diagnoses, variant);
+      metrics[`markHostile_${variant.split('/')[1]}`] = got.total;
+      // Whatever the file printed or raised, the page shows no control character.
+      const text = await page.textContent(tid('mark'));
+      assert.ok(!/[\u0000-\u0008\u000b-\u001f\u007f-\u009f\u202a-\u202e]/.test(text), `${variant}: a control character in the report`);
+    }
+    assert.equal(metrics.markHostile_browser_escape, '20.00');
+  } finally {
+    await new Promise((ok) => server.close(ok));
+  }
+  metrics.markHostileConnections = connections;
+  assert.equal(connections, 0, 'a connection reached the listener');
+});
+
 test('mark my code: an endless loop is stopped at 10 s and the page stays usable; bad files get messages', async () => {
   // One call per task, seed 1: the loop variant's nndr call (t = 0.91, over its 0.9)
   // runs into the 10 s limit, the worker is replaced, and matching_info is marked after it.
