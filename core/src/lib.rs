@@ -13,19 +13,16 @@
 
 mod border;
 mod camera;
-#[cfg(all(feature = "cli", not(target_arch = "wasm32")))]
-pub mod cli;
 pub mod dataset;
 pub mod error;
 mod gray_png;
 pub mod image;
 pub mod manual;
-pub mod mark;
 pub mod matching;
 mod par;
 pub mod pyfmt;
 pub mod render;
-mod rng;
+pub mod rng;
 pub mod sift;
 pub mod simd;
 #[cfg(test)]

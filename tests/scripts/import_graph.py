@@ -882,7 +882,7 @@ def _dot(graph, rel, cycle_edges):
 def main(argv=None):
     here = os.path.dirname(os.path.abspath(__file__))
     ap = argparse.ArgumentParser(description="File-level import graph of Rust crates; exit 1 on a cycle.")
-    ap.add_argument("roots", nargs="*", help="crate root files (default: core/src/lib.rs app/src/lib.rs)")
+    ap.add_argument("roots", nargs="*", help="crate root files (default: the crates of the workspace)")
     ap.add_argument("--workspace", default=os.path.normpath(os.path.join(here, "..", "..")),
                     help="where the default roots are, and what printed paths are relative to")
     ap.add_argument("--edges", action="store_true", help="print every edge with its names")
@@ -899,7 +899,8 @@ def main(argv=None):
     if args.roots:
         roots = [os.path.abspath(r) if os.path.exists(r) else os.path.join(ws, r) for r in args.roots]
     else:
-        roots = [os.path.join(ws, "core", "src", "lib.rs"), os.path.join(ws, "app", "src", "lib.rs")]
+        roots = [os.path.join(ws, *r.split("/")) for r in
+                 ("core/src/lib.rs", "core/mark/src/lib.rs", "core/cli/src/lib.rs", "app/src/lib.rs")]
     roots = [os.path.normpath(r) for r in roots]
     for r in roots:
         if not os.path.isfile(r):

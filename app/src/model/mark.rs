@@ -2,7 +2,7 @@
 //! marking's time limits (the lab's: 10 s a call, 300 s a task).
 
 /// Cases per task when none are asked for (the lab's automarker: 25).
-pub const DEFAULT_CASES: u32 = siftlab_core::mark::DEFAULT_CASES as u32;
+pub const DEFAULT_CASES: u32 = siftlab_mark::DEFAULT_CASES as u32;
 /// At most this many cases per task from the link or the box.
 pub const MAX_CASES: u32 = 200;
 /// The lab's limits, in ms.

@@ -8,7 +8,7 @@ use crate::model::mark::MAX_CASES;
 use crate::services::loading::read_file;
 use crate::services::mark::{run, Timing};
 use leptos::prelude::*;
-use siftlab_core::mark::{Marks, Status};
+use siftlab_mark::{Marks, Status};
 
 #[derive(Clone, Debug, PartialEq)]
 struct Outcome {

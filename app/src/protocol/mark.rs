@@ -5,7 +5,7 @@
 
 use super::codec::{get_features, get_u32, set, set_features};
 use js_sys::Object;
-use siftlab_core::mark::Pair;
+use siftlab_mark::Pair;
 use wasm_bindgen::JsValue;
 
 /// The pair's fields, added to the message object `o`.

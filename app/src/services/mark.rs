@@ -10,7 +10,7 @@
 use crate::model::lab::Source;
 use crate::protocol::mark::set_pair;
 use crate::worker::MARK_WORKER_NAME;
-use siftlab_core::mark::{check_source, Limits, Marks, Outcome, Pair, Pairs, Session, Step};
+use siftlab_mark::{check_source, Limits, Marks, Outcome, Pair, Pairs, Session, Step};
 use std::cell::Cell;
 use std::cell::RefCell;
 use std::collections::HashMap;

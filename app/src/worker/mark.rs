@@ -4,7 +4,7 @@
 //! request of the Python harness ([`mark_host_knn`], docs/marking.md).
 
 use crate::protocol::mark::get_pair;
-use siftlab_core::mark::{knn_answer, Pair};
+use siftlab_mark::{knn_answer, Pair};
 use std::cell::RefCell;
 use wasm_bindgen::prelude::*;
 

@@ -21,14 +21,14 @@
 pub(crate) mod draw;
 pub(crate) mod flow;
 pub(crate) mod font;
-pub(crate) mod info;
-pub(crate) mod matches;
+pub mod info;
+pub mod matches;
 // The colours, dashes and markers of every figure for people (the CLI's
 // plots and matches.png, the app): one palette, public for the app.
 pub mod palette;
 // The VO figures (axes, SVG, raster) the CLI and the app share: an API of its own.
 pub mod plot;
-pub(crate) mod trajectory;
+pub mod trajectory;
 pub(crate) mod whole_frame;
 
 use crate::error::{Error, Result};

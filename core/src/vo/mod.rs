@@ -10,13 +10,13 @@
 // Every unsafe operation sits in its own `unsafe` block with the reason it
 // holds, also inside `unsafe fn`s.
 
-pub(crate) mod export;
+pub mod export;
 pub(crate) mod five_point;
 pub(crate) mod linalg;
 pub(crate) mod lk;
-pub(crate) mod matched;
-pub(crate) mod metrics;
-pub(crate) mod odometry;
+pub mod matched;
+pub mod metrics;
+pub mod odometry;
 pub(crate) mod ransac;
 pub(crate) mod recover_pose;
 #[cfg(test)]

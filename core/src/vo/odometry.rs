@@ -77,7 +77,7 @@ pub struct StepDetail {
 
 impl StepResult {
     /// Frame `frame` before anything happened: the pose so far, no counts.
-    pub(crate) fn start(frame: usize, gt: Option<&PoseRow>, rotation: Mat3) -> StepResult {
+    pub fn start(frame: usize, gt: Option<&PoseRow>, rotation: Mat3) -> StepResult {
         StepResult {
             frame,
             position: [0.0; 3],

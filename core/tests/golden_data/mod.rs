@@ -96,7 +96,9 @@ pub fn fixtures() -> PathBuf {
 }
 
 pub fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    // The workspace root (core/ for the library's tests, core/cli/ for the CLI's).
+    let here = Path::new(env!("CARGO_MANIFEST_DIR"));
+    here.ancestors().find(|p| p.join("Cargo.lock").exists()).unwrap_or(here).to_path_buf()
 }
 
 /// The bundled real KITTI data (`www/demo/MyKITTI`).

@@ -9,7 +9,7 @@ fn main() {}
 fn main() {
     in_huge_pages();
     keep_freed_memory();
-    std::process::exit(siftlab_core::cli::main());
+    std::process::exit(siftlab_cli::main());
 }
 
 /// Tells glibc's allocator to keep freed memory for reuse instead of giving

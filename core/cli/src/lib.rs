@@ -2,6 +2,9 @@
 //! (`get_info`, `view_feature`, `view_info`, `view_trajectory`) plus `sift`.
 //! Arguments are checked here with messages that say what to do; the work is
 //! done by the library.
+//!
+//! Native only: on wasm32 this crate is empty (its binary an empty `main`).
+#![cfg(not(target_arch = "wasm32"))]
 
 pub mod anatomy;
 pub mod args;
@@ -12,26 +15,26 @@ mod sandbox;
 pub mod trajectory;
 pub mod visual;
 
-use crate::error::{Error, Result};
-use crate::image::GrayImage;
-use crate::matching::args::parse_index;
-use crate::matching::{match_feature, matching_info, MatchInfo, Strategy};
-use crate::pyfmt::{py_float, py_str};
-use crate::sift::{detect_and_compute, Features};
 pub use args::{AnatomyArgs, Cli, Command, MarkArgs, MatchAllArgs, MatchArgs, SiftArgs, TrajectoryArgs};
 use clap::Parser;
 use common::{open_dataset, parse_threshold, sift_params, MatchContext};
+use siftlab_core::error::{Error, Result};
+use siftlab_core::image::GrayImage;
+use siftlab_core::matching::args::parse_index;
+use siftlab_core::matching::{match_feature, matching_info, MatchInfo, Strategy};
+use siftlab_core::pyfmt::{py_float, py_str};
+use siftlab_core::sift::{detect_and_compute, Features};
 use std::io::Write;
 use std::path::Path;
 
 /// Runs the CLI; returns the process exit code.
 pub fn main() -> i32 {
     let cli = Cli::parse();
-    // SIFTLAB_SIMD caps the kernels (see `crate::simd`): results are the same
+    // SIFTLAB_SIMD caps the kernels (see `siftlab_core::simd`): results are the same
     // at every level, only the time differs.
     if let Some(v) = std::env::var_os("SIFTLAB_SIMD") {
-        match v.to_str().and_then(crate::simd::SimdLevel::parse) {
-            Some(level) => crate::simd::set_cap(level),
+        match v.to_str().and_then(siftlab_core::simd::SimdLevel::parse) {
+            Some(level) => siftlab_core::simd::set_cap(level),
             None => {
                 eprintln!(
                     "siftlab: error: SIFTLAB_SIMD={} is not a SIMD level: use scalar, avx2 or avx512 (or unset it)",

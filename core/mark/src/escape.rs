@@ -9,15 +9,13 @@
 /// characters (saying how many were left out).
 pub fn escaped(text: &str, max: usize) -> String {
     let mut out = String::with_capacity(text.len().min(max + 16));
-    let mut shown = 0;
     let mut chars = text.chars();
-    for c in chars.by_ref() {
+    for (shown, c) in chars.by_ref().enumerate() {
         if shown >= max {
             let rest = 1 + chars.count();
             out.push_str(&format!(" … ({rest} more characters)"));
             return out;
         }
-        shown += 1;
         match c {
             '\n' => out.push_str("\\n"),
             '\r' => out.push_str("\\r"),

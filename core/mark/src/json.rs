@@ -4,7 +4,7 @@
 //! `Infinity`, `-Infinity`), and a writer that escapes everything outside
 //! printable ASCII, so any pipe encoding carries it.
 
-use crate::pyfmt::{py_float, py_str};
+use siftlab_core::pyfmt::{py_float, py_str};
 
 /// A JSON value. Integers that do not fit an i128 keep their digits.
 #[derive(Clone, Debug, PartialEq)]

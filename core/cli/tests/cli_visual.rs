@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 fn dataset() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../../www/demo/MyKITTI")
 }
 
 fn scratch(name: &str) -> PathBuf {

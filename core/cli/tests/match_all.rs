@@ -6,7 +6,9 @@
 
 #![cfg(not(target_arch = "wasm32"))]
 
+#[path = "../../tests/golden_data/mod.rs"]
 mod golden_data;
+#[path = "../../tests/json_mini/mod.rs"]
 mod json_mini;
 
 use golden_data::{kitti, repo_root};

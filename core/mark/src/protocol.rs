@@ -2,13 +2,13 @@
 //! `www/py/siftlab_harness.py`, one JSON object a line (docs/marking.md
 //! §Messages), and the host's answer to the harness's `knnMatch` requests.
 
-use super::b64::{base64, unbase64};
-use super::cases::Case;
-use super::json::{parse, push_str, quote, Json};
-use super::reference::Expected;
-use crate::matching::knn_match;
-use crate::pyfmt::py_f32;
-use crate::sift::{Features, KeyPoint};
+use crate::b64::{base64, unbase64};
+use crate::cases::Case;
+use crate::json::{parse, push_str, quote, Json};
+use crate::reference::Expected;
+use siftlab_core::matching::knn_match;
+use siftlab_core::pyfmt::py_f32;
+use siftlab_core::sift::{Features, KeyPoint};
 use std::fmt::Write as _;
 
 /// A frame pair the harness has been sent: `prev` (FRAME_ID-1) is the
@@ -81,7 +81,7 @@ pub fn call_message(case: &Case, pair: u32, expected: &Expected) -> String {
         }
         _ => {
             let t = case.strategy().threshold();
-            let t = t.map_or("null".to_string(), crate::pyfmt::py_float);
+            let t = t.map_or("null".to_string(), siftlab_core::pyfmt::py_float);
             format!("{{\"op\": \"call\", \"fn\": \"{name}\", \"pair\": {pair}, \"threshold\": {t}, \"compact\": true}}")
         }
     }
@@ -176,16 +176,18 @@ pub fn parse_line(line: &str, id: u64) -> HarnessLine {
 
 /// Reads a reply line for request `id` (a knn request or a stray line
 /// here is an error).
-pub fn parse_reply(line: &str, id: u64) -> crate::Result<Reply> {
+pub fn parse_reply(line: &str, id: u64) -> siftlab_core::Result<Reply> {
     match parse_line(line, id) {
         HarnessLine::Reply(r) => Ok(r),
-        HarnessLine::Knn => Err(crate::Error::InvalidArgument("a knn request where a reply was expected".into())),
-        HarnessLine::Stray(why) => Err(crate::Error::InvalidArgument(why)),
+        HarnessLine::Knn => {
+            Err(siftlab_core::Error::InvalidArgument("a knn request where a reply was expected".into()))
+        }
+        HarnessLine::Stray(why) => Err(siftlab_core::Error::InvalidArgument(why)),
     }
 }
 
 fn bad_line(line: &str, why: &str) -> String {
-    format!("a line siftlab cannot read ({why}): {}", super::escape::escaped(line, 200))
+    format!("a line siftlab cannot read ({why}): {}", crate::escape::escaped(line, 200))
 }
 
 fn reply_of(v: Json) -> Result<Reply, String> {
@@ -211,7 +213,7 @@ fn reply_of(v: Json) -> Result<Reply, String> {
             Some("protocol") => ErrorKind::Protocol,
             _ => ErrorKind::Runtime,
         };
-        return Ok(Reply::Error { message: super::escape::escaped(&message, MAX_MESSAGE_CHARS), kind });
+        return Ok(Reply::Error { message: crate::escape::escaped(&message, MAX_MESSAGE_CHARS), kind });
     }
     match value {
         Some(value) => Ok(Reply::Ok { value }),
@@ -267,7 +269,7 @@ pub fn knn_answer(request: &str, pairs: &[Pair]) -> String {
 }
 
 /// `{"matches": [[[trainIdx, distance], …], …]}`.
-fn knn_answer_lists(all: &[Vec<crate::matching::DMatch>]) -> String {
+fn knn_answer_lists(all: &[Vec<siftlab_core::matching::DMatch>]) -> String {
     let n: usize = all.iter().map(Vec::len).sum();
     let mut s = String::with_capacity(16 + 3 * all.len() + 24 * n);
     s.push_str("{\"matches\": [");
@@ -329,7 +331,7 @@ fn side<'a>(v: &Json, data: &str, id: &str, count: &str, pairs: &'a [Pair]) -> R
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::matching::{DMatch, MatchInfo, Strategy};
+    use siftlab_core::matching::{DMatch, MatchInfo, Strategy};
 
     fn features(n: usize, seed: u8) -> Features {
         let kp = KeyPoint { x: 523.97, y: 181.2, size: 2.5, angle: 359.9, response: 0.0123, octave: 0x10203 };

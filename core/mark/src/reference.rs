@@ -1,13 +1,13 @@
 //! The reference value of a case (siftlab's engine, equal to OpenCV 4.8's)
 //! and the comparison with what the student's function returned.
 
-use super::b64::unbase64;
-use super::cases::{Case, NUM_FEATURES};
-use super::json::Json;
-use crate::error::{Error, Result};
-use crate::matching::{match_all, match_feature, matching_info, DMatch, MatchInfo};
-use crate::pyfmt::{py_f32, py_float};
-use crate::sift::Features;
+use crate::b64::unbase64;
+use crate::cases::{Case, NUM_FEATURES};
+use crate::json::Json;
+use siftlab_core::error::{Error, Result};
+use siftlab_core::matching::{match_all, match_feature, matching_info, DMatch, MatchInfo};
+use siftlab_core::pyfmt::{py_f32, py_float};
+use siftlab_core::sift::Features;
 
 /// What the reference implementation returns for a case.
 #[derive(Clone, Debug, PartialEq)]
@@ -257,9 +257,9 @@ pub fn got_lists_text(got: &[Vec<Got>], at: Option<(usize, usize)>) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mark::json::parse;
-    use crate::matching::Strategy;
-    use crate::sift::KeyPoint;
+    use crate::json::parse;
+    use siftlab_core::matching::Strategy;
+    use siftlab_core::sift::KeyPoint;
 
     fn m(q: usize, t: usize, d: f32) -> DMatch {
         DMatch { query_idx: q, train_idx: t, distance: d }
@@ -280,7 +280,7 @@ mod tests {
         assert_eq!(returned_matches(&parse("[[[0, 3]]]").unwrap()).unwrap_err(), "item 0 of list 0 is not a DMatch");
         assert_eq!(returned_matches(&parse("[1]").unwrap()).unwrap_err(), "item 0 is a int, not a list");
         // The compact form: q, t as int32 and d as float32, little endian.
-        let le = |v: &[u32]| crate::mark::b64::base64(&v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>());
+        let le = |v: &[u32]| crate::b64::base64(&v.iter().flat_map(|x| x.to_le_bytes()).collect::<Vec<u8>>());
         let compact = format!(
             r#"{{"n": [2, 0], "q": "{}", "t": "{}", "d": "{}"}}"#,
             le(&[0, 0]),

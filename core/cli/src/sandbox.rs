@@ -6,7 +6,7 @@
 //! memory, processes, file size and open files. The process tree is
 //! measured here (CPU time, memory) and killed as a whole.
 
-use crate::error::{Error, Result};
+use siftlab_core::error::{Error, Result};
 use std::ffi::OsString;
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
@@ -81,10 +81,10 @@ impl Python {
             })
         })?;
         let text = String::from_utf8_lossy(&out.stdout);
-        let v = crate::mark::parse_json(text.trim()).map_err(|_| {
+        let v = siftlab_mark::parse_json(text.trim()).map_err(|_| {
             Error::InvalidArgument(format!(
                 "{shown} could not describe itself (Python 3.8 or later is needed): {}",
-                crate::mark::escaped(String::from_utf8_lossy(&out.stderr).trim(), 400)
+                siftlab_mark::escaped(String::from_utf8_lossy(&out.stderr).trim(), 400)
             ))
         })?;
         let s = |k: &str| v.get(k).and_then(|x| x.as_str()).map(str::to_string);
@@ -253,7 +253,7 @@ pub fn check(python: &Python, harness_dir: &Path) -> std::result::Result<(), Str
     c = probe;
     match c.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).output() {
         Ok(o) if o.status.success() => Ok(()),
-        Ok(o) => Err(crate::mark::escaped(String::from_utf8_lossy(&o.stderr).trim(), 300)),
+        Ok(o) => Err(siftlab_mark::escaped(String::from_utf8_lossy(&o.stderr).trim(), 300)),
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
             Err("bwrap (bubblewrap) is not installed: apt install bubblewrap".into())
         }

@@ -1,11 +1,11 @@
 //! What the commands share: the SIFT parameters the flags ask for, the
 //! dataset's frames, and the matched pair the visual commands draw.
 
-use super::args::Cli;
-use crate::dataset::Dataset;
-use crate::error::Result;
-use crate::image::GrayImage;
-use crate::sift::{Features, SiftParams};
+use crate::args::Cli;
+use siftlab_core::dataset::Dataset;
+use siftlab_core::error::Result;
+use siftlab_core::image::GrayImage;
+use siftlab_core::sift::{Features, SiftParams};
 use std::path::PathBuf;
 
 pub(crate) fn sift_params(cli: &Cli) -> SiftParams {
@@ -23,11 +23,11 @@ pub struct MatchContext {
     pub prev: Features,
     pub cur: Features,
     pub feature: usize,
-    pub matches: Vec<crate::matching::DMatch>,
+    pub matches: Vec<siftlab_core::matching::DMatch>,
 }
 
 pub(crate) fn parse_threshold(s: &Option<String>) -> Result<Option<f64>> {
-    s.as_deref().map(crate::matching::args::parse_threshold).transpose()
+    s.as_deref().map(siftlab_core::matching::args::parse_threshold).transpose()
 }
 
 /// `~` expands like the lab's `os.path.expanduser`.

@@ -2,10 +2,10 @@
 //! stage keeps, why the refinement dropped the others) and, with `--out`,
 //! the Gaussian and DoG pyramid as PNGs.
 
-use crate::error::{Error, Result};
-use crate::image::GrayImage;
-use crate::sift::anatomy::{anatomy, level_to_gray, Anatomy};
-use crate::sift::SiftParams;
+use siftlab_core::error::{Error, Result};
+use siftlab_core::image::GrayImage;
+use siftlab_core::sift::anatomy::{anatomy, level_to_gray, Anatomy};
+use siftlab_core::sift::SiftParams;
 use std::io::Write;
 use std::path::Path;
 

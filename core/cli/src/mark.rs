@@ -1,23 +1,23 @@
 //! `siftlab mark vision_tasks.py [-n N] [--seed S] [--json] [--no-sandbox]`:
 //! the student's file marked as the lab's automarker marks it
 //! (docs/marking.md). This is the native transport of `core::mark::Session`:
-//! the harness (the three `www/py` files, written to a temporary folder)
+//! the harness (`siftlab_mark::HARNESS_FILES`, written to a temporary folder)
 //! runs in python3 inside a bubblewrap sandbox (`sandbox.rs`); requests go
 //! to its stdin, replies and knn requests come from its stdout, and each
 //! request's limit is the CPU time of the whole sandbox plus siftlab's knn
 //! answers, with a wall-clock backstop. Exit status: 0 for 20 / 20, 1 for
 //! fewer marks, 2 when the file could not be marked at all.
 
-use super::args::{Cli, MarkArgs};
-use super::common::{open_dataset, sift_params};
-use super::sandbox::{self, Python};
-use crate::dataset::Dataset;
-use crate::error::{Error, Result};
-use crate::mark::{
+use crate::args::{Cli, MarkArgs};
+use crate::common::{open_dataset, sift_params};
+use crate::sandbox::{self, Python};
+use siftlab_core::dataset::Dataset;
+use siftlab_core::error::{Error, Result};
+use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
+use siftlab_mark::{
     check_source, escaped, knn_answer, parse_line, report_json, report_text, HarnessLine, Limits, Marks, Outcome, Pair,
     Pairs, Session, Status, Step, Task, MAX_LINE_BYTES,
 };
-use crate::sift::{detect_and_compute, Features, SiftParams};
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read, Write};
 use std::path::PathBuf;
@@ -25,13 +25,6 @@ use std::process::{Child, Stdio};
 use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-
-/// The harness and the shims it loads, as the app serves them.
-const FILES: [(&str, &str); 3] = [
-    ("siftlab_harness.py", include_str!("../../../www/py/siftlab_harness.py")),
-    ("cv2.py", include_str!("../../../www/py/cv2.py")),
-    ("vision_tasks_base.py", include_str!("../../../www/py/vision_tasks_base.py")),
-];
 
 /// How often a waiting request's CPU time and memory are read.
 const POLL: Duration = Duration::from_millis(50);
@@ -138,7 +131,7 @@ impl Runner {
         let exe = std::env::var_os("SIFTLAB_PYTHON").unwrap_or_else(|| "python3".into());
         let python = Python::find(&exe)?;
         let dir = TempDir::new()?;
-        for (file, text) in FILES {
+        for (file, text) in siftlab_mark::HARNESS_FILES {
             let path = dir.0.join(file);
             std::fs::write(&path, text)
                 .map_err(|e| Error::InvalidArgument(format!("cannot write {}: {e}", path.display())))?;

@@ -2,7 +2,7 @@
 //! and that it is printable ASCII as the lab requires; and the outcomes that
 //! score 0 on every task.
 
-use super::protocol::ErrorKind;
+use crate::protocol::ErrorKind;
 use std::fmt;
 
 /// Larger files are refused unread (a vision_tasks.py is a few KB).

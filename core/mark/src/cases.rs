@@ -1,9 +1,9 @@
 //! The marker's cases: which function is called on which frame pair with
 //! which threshold, drawn from a seed (docs/marking.md §The lab's marking).
 
-use crate::matching::Strategy;
-use crate::pyfmt::py_float;
-use crate::rng::CvRng;
+use siftlab_core::matching::Strategy;
+use siftlab_core::pyfmt::py_float;
+use siftlab_core::rng::CvRng;
 
 /// The four marked functions, in the order they are marked.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

@@ -11,9 +11,9 @@
 //! else: never equal); any tagged value may carry `"sub": CLASS` (an
 //! instance of a subclass, encoded as its base value).
 
-use super::json::Json;
-use crate::matching::MatchInfo;
-use crate::pyfmt::py_float;
+use crate::json::Json;
+use siftlab_core::matching::MatchInfo;
+use siftlab_core::pyfmt::py_float;
 
 /// A Python value as the lab's comparison sees it.
 #[derive(Clone, Debug, PartialEq)]
@@ -170,19 +170,19 @@ impl PyValue {
             PyValue::Int(i) => out.push_str(&i.to_string()),
             PyValue::BigInt(s) => out.push_str(s),
             PyValue::Float(f) => out.push_str(&py_float(*f)),
-            PyValue::Str(s) => out.push_str(&crate::pyfmt::py_str(s)),
+            PyValue::Str(s) => out.push_str(&siftlab_core::pyfmt::py_str(s)),
             PyValue::Tuple(v) => seq(out, v, '(', ')'),
             PyValue::List(v) => seq(out, v, '[', ']'),
             PyValue::Np(_, v) => v.repr_into(out),
             PyValue::Sub(name, v) => {
-                out.push_str(&super::escape::escaped(name, 60));
+                out.push_str(&crate::escape::escaped(name, 60));
                 out.push('(');
                 v.repr_into(out);
                 out.push(')');
             }
             PyValue::Opaque(name) => {
                 out.push('<');
-                out.push_str(&super::escape::escaped(name, 60));
+                out.push_str(&crate::escape::escaped(name, 60));
                 out.push_str(" object>");
             }
         }
@@ -294,7 +294,7 @@ pub fn info_type_problem(v: &PyValue) -> Option<String> {
         if !ok {
             return Some(format!(
                 "matching_info: {what} must be a {want}, got {}",
-                super::escape::escaped(part.type_name(), 60)
+                crate::escape::escaped(part.type_name(), 60)
             ));
         }
     }
@@ -304,7 +304,7 @@ pub fn info_type_problem(v: &PyValue) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mark::json::parse;
+    use crate::json::parse;
 
     fn v(text: &str) -> PyValue {
         PyValue::from_json(&parse(text).unwrap())

@@ -6,19 +6,19 @@
 //! request the poses, the metrics as JSON, a plot with axes (PNG or SVG) and
 //! the per-frame counts as JSON Lines.
 
-use crate::dataset::Dataset;
-use crate::dataset::PoseRow;
-use crate::error::{Error, Result};
-use crate::image::GrayImage;
-use crate::matching::Strategy;
-use crate::render::plot::figures::{report_figure, run_style, Run};
-use crate::render::plot::{raster::rasterize, svg::to_svg};
-use crate::sift::{detect_and_compute, Features, SiftParams};
-use crate::vo::export::{kitti_text, tum_text};
-use crate::vo::matched::MatchedOdometry;
-use crate::vo::metrics::{ate_rmse, describe_kitti_segments, evaluate, kitti_segments, TrajectoryMetrics};
-use crate::vo::odometry::{pose_row, run, sift_detector};
-use crate::vo::{Odometry, StepResult};
+use siftlab_core::dataset::Dataset;
+use siftlab_core::dataset::PoseRow;
+use siftlab_core::error::{Error, Result};
+use siftlab_core::image::GrayImage;
+use siftlab_core::matching::Strategy;
+use siftlab_core::render::plot::figures::{report_figure, run_style, Run};
+use siftlab_core::render::plot::{raster::rasterize, svg::to_svg};
+use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
+use siftlab_core::vo::export::{kitti_text, tum_text};
+use siftlab_core::vo::matched::MatchedOdometry;
+use siftlab_core::vo::metrics::{ate_rmse, describe_kitti_segments, evaluate, kitti_segments, TrajectoryMetrics};
+use siftlab_core::vo::odometry::{pose_row, run, sift_detector};
+use siftlab_core::vo::{Odometry, StepResult};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
@@ -153,7 +153,7 @@ pub fn view_trajectory(
     };
 
     let est: Vec<[f64; 3]> = steps.iter().map(|s| s.position).collect();
-    let gt: Vec<[f64; 3]> = ds.poses()[..n].iter().map(crate::dataset::position).collect();
+    let gt: Vec<[f64; 3]> = ds.poses()[..n].iter().map(siftlab_core::dataset::position).collect();
     let ate = ate_rmse(&est, &gt)?;
     let poses: Vec<_> = steps.iter().map(|s| (s.rotation, s.position)).collect();
     let rows: Vec<_> = poses.iter().map(|(r, t)| pose_row(r, t)).collect();
@@ -177,7 +177,7 @@ pub fn view_trajectory(
         let (name, style) = run_style(opts.strategy.as_ref());
         let scene = report_figure(&gt, &[Run { name, style, positions: est.clone() }], 720);
         let bytes =
-            if svg { to_svg(&scene, None).into_bytes() } else { crate::render::encode_png(&rasterize(&scene))? };
+            if svg { to_svg(&scene, None).into_bytes() } else { siftlab_core::render::encode_png(&rasterize(&scene))? };
         write(path, &bytes, "the plot")?;
     }
 
@@ -195,7 +195,7 @@ pub fn view_trajectory(
     // The summary is the app's line too (`TrajectoryMetrics::summary`); the
     // segments the KITTI figures rest on follow on a line of their own.
     let _ = writeln!(out, "{} ({n} frames): {}", run_style(opts.strategy.as_ref()).0, metrics.summary());
-    let path: f64 = gt.windows(2).map(|w| crate::dataset::dist3(&w[0], &w[1])).sum();
+    let path: f64 = gt.windows(2).map(|w| siftlab_core::dataset::dist3(&w[0], &w[1])).sum();
     let _ = write!(out, "KITTI metric: {} (true path {path:.1} m)", describe_kitti_segments(&segments));
     Ok((out, metrics))
 }
@@ -203,8 +203,8 @@ pub fn view_trajectory(
 /// The lab's window after the last frame (truth green, estimate red, the
 /// current coordinates as text), as `trajectory.png`.
 fn write_png(out: &Path, est: &[[f64; 3]], gt: &[[f64; 3]]) -> Result<()> {
-    let img = crate::render::trajectory::draw(gt, est, &crate::render::trajectory::Style::default());
-    let png = crate::render::encode_png(&img)?;
+    let img = siftlab_core::render::trajectory::draw(gt, est, &siftlab_core::render::trajectory::Style::default());
+    let png = siftlab_core::render::encode_png(&img)?;
     std::fs::write(out, png).map_err(|e| Error::Dataset(format!("cannot write {}: {e}", out.display())))
 }
 
@@ -294,9 +294,9 @@ mod tests {
     /// line equals the OpenCV scripts' line for the same counts.
     #[test]
     fn trace_lines_read_as_python_writes_them() {
-        let mut a = StepResult::start(0, None, crate::vo::IDENTITY);
+        let mut a = StepResult::start(0, None, siftlab_core::vo::IDENTITY);
         a.redetected = true;
-        let mut b = StepResult::start(7, None, crate::vo::IDENTITY);
+        let mut b = StepResult::start(7, None, siftlab_core::vo::IDENTITY);
         (b.points_in, b.tracked, b.essential_inliers, b.pose_inliers) = (1502, 1467, 1423, 1022);
         assert_eq!(
             trace_jsonl(&[a, b.clone()]),

@@ -3,10 +3,10 @@
 //! after writing the image (the lab's methods return nothing, so it prints
 //! no `ret count`).
 
-use super::common::MatchContext;
-use crate::error::{Error, Result};
-use crate::matching::MatchInfo;
-use crate::render::{encode_png, info, matches, RgbImage};
+use crate::common::MatchContext;
+use siftlab_core::error::{Error, Result};
+use siftlab_core::matching::MatchInfo;
+use siftlab_core::render::{encode_png, info, matches, RgbImage};
 use std::io::Write;
 use std::path::Path;
 

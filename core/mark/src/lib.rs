@@ -1,6 +1,6 @@
 //! Marking a student's `vision_tasks.py` as the lab's automarker does
 //! (docs/marking.md): the cases from a seed, the messages to and from the
-//! Python harness (`www/py/siftlab_harness.py`), the reference values,
+//! Python harness (`py/siftlab_harness.py` of this crate), the reference values,
 //! the comparison and diagnosis of each case, the 20 marks and the report.
 //! No I/O here: the CLI (`siftlab mark`) and the app's worker run the
 //! harness and carry the messages.
@@ -44,3 +44,12 @@ pub use reference::{reference, Expected};
 pub use report::{report_json, report_text, Marks, TaskMarks};
 pub use session::{Limits, Outcome, Pairs, Session, Step};
 pub use source::{check_source, Rejection, MAX_SOURCE_BYTES};
+
+/// The Python side of the marking, as files: the harness and the two shims
+/// it loads (`py/` of this crate). `siftlab mark` writes them into its
+/// sandbox; `www/build` copies the folder into `dist/py/` for the app.
+pub const HARNESS_FILES: [(&str, &str); 3] = [
+    ("siftlab_harness.py", include_str!("../py/siftlab_harness.py")),
+    ("cv2.py", include_str!("../py/cv2.py")),
+    ("vision_tasks_base.py", include_str!("../py/vision_tasks_base.py")),
+];

@@ -6,15 +6,15 @@
 //! default) or both frames side by side (`--layout side`). `--json` adds
 //! every match with its distance, Sampson distance and verdict.
 
-use super::args::{Cli, MatchAllArgs};
-use super::common::{note_camera, open_dataset, parse_threshold, sift_params};
-use crate::error::{Error, Result};
-use crate::matching::args::parse_index;
-use crate::matching::epipolar::{fundamental, sampsons, Verdicts};
-use crate::matching::{match_all, DMatch, Strategy};
-use crate::pyfmt::py_f32;
-use crate::render::{encode_png, flow_frame, whole_frame};
-use crate::sift::detect_and_compute;
+use crate::args::{Cli, MatchAllArgs};
+use crate::common::{note_camera, open_dataset, parse_threshold, sift_params};
+use siftlab_core::error::{Error, Result};
+use siftlab_core::matching::args::parse_index;
+use siftlab_core::matching::epipolar::{fundamental, sampsons, Verdicts};
+use siftlab_core::matching::{match_all, DMatch, Strategy};
+use siftlab_core::pyfmt::py_f32;
+use siftlab_core::render::{encode_png, flow_frame, whole_frame};
+use siftlab_core::sift::detect_and_compute;
 use std::io::Write;
 use std::path::Path;
 

@@ -3,7 +3,9 @@
 
 #![cfg(not(target_arch = "wasm32"))]
 
+#[path = "../../tests/golden_data/mod.rs"]
 mod golden_data;
+#[path = "../../tests/json_mini/mod.rs"]
 mod json_mini;
 
 use golden_data::{golden_frames, golden_lanes, golden_params, golden_sets, kitti, primary_set};
@@ -23,7 +25,7 @@ fn dataset() -> PathBuf {
 }
 
 fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn golden_lanes_args() -> [String; 2] {

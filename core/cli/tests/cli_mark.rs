@@ -13,12 +13,13 @@
 
 #![cfg(not(target_arch = "wasm32"))]
 
+#[path = "../../tests/json_mini/mod.rs"]
 mod json_mini;
 
 use json_mini::Json;
-use siftlab_core::mark::{knn_answer, plan, unbase64, Case, Pair, MAX_SOURCE_BYTES};
 use siftlab_core::sift::{detect_and_compute, SiftParams};
 use siftlab_core::GrayImage;
+use siftlab_mark::{knn_answer, plan, unbase64, Case, Pair, MAX_SOURCE_BYTES};
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -26,7 +27,7 @@ use std::sync::OnceLock;
 use std::time::{Duration, Instant};
 
 fn repo_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 fn frame_file(root: &Path, i: usize) -> PathBuf {
@@ -352,7 +353,7 @@ fn knn_answers_equal_opencv() {
         assert_eq!(pair.cur.descriptors.len() as i64, g.get("nt").and_then(Json::i64).unwrap());
         let id = pair.id;
         let pairs = [pair];
-        let b64 = |row: &[u8; 128]| siftlab_core::mark::base64(row);
+        let b64 = |row: &[u8; 128]| siftlab_mark::base64(row);
         // One query by value against the pair's train side.
         let answer = |q: usize, k: i64| -> Vec<(i64, f32)> {
             let req = format!(
@@ -442,11 +443,8 @@ fn the_sandbox_is_required_unless_waived() {
     let python = String::from_utf8_lossy(&probe.stdout).trim().to_string();
     let empty = std::env::temp_dir().join(format!("siftlab-no-bwrap-{}", std::process::id()));
     fs::create_dir_all(&empty).unwrap();
-    let (o, _) = mark_with(
-        &fixture("good"),
-        &["-n", "1"],
-        &[("PATH", empty.to_str().unwrap()), ("SIFTLAB_PYTHON", &python)],
-    );
+    let (o, _) =
+        mark_with(&fixture("good"), &["-n", "1"], &[("PATH", empty.to_str().unwrap()), ("SIFTLAB_PYTHON", &python)]);
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     for w in ["no usable sandbox", "bubblewrap", "--no-sandbox"] {
         assert!(stderr(&o).contains(w), "lacks {w:?}: {}", stderr(&o));

@@ -3,18 +3,18 @@
 //! whole result shows (a list per query dropped, float64 distances, another
 //! order, a threshold ignored, the empty case, …).
 
-use super::cases::Case;
-use super::escape::escaped;
-use super::json::Json;
-use super::protocol::{ErrorKind, Reply};
-use super::pyvalue::{info_type_problem, info_value, PyValue};
-use super::reference::{
+use crate::cases::Case;
+use crate::escape::escaped;
+use crate::json::Json;
+use crate::protocol::{ErrorKind, Reply};
+use crate::pyvalue::{info_type_problem, info_value, PyValue};
+use crate::reference::{
     difference_at, expected_text, first_difference, got_lists_text, info_equal, info_json, matches_equal,
     returned_matches, shorten, Expected, Got,
 };
-use crate::matching::{knn_match, match_all, matching_info, DMatch, MatchInfo, Mistake, Strategy};
-use crate::pyfmt::{py_f32, py_float};
-use crate::sift::Features;
+use siftlab_core::matching::{knn_match, match_all, matching_info, DMatch, MatchInfo, Mistake, Strategy};
+use siftlab_core::pyfmt::{py_f32, py_float};
+use siftlab_core::sift::Features;
 
 /// How a case ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -523,7 +523,7 @@ fn diagnose_info(matches: &[DMatch], info: &MatchInfo, got: &Json, prev: &Featur
     if same(&build(&|v| Json::Float(v as f64), false)) {
         return Diagnosis::FloatCoordinates;
     }
-    if same(&build(&|v| Json::Int(crate::matching::py_int(v) as i128), true)) {
+    if same(&build(&|v| Json::Int(siftlab_core::matching::py_int(v) as i128), true)) {
         return Diagnosis::SwappedXY;
     }
     // Query from kp2 and matches from kp1.
@@ -536,7 +536,7 @@ fn diagnose_info(matches: &[DMatch], info: &MatchInfo, got: &Json, prev: &Featur
             points: matches
                 .iter()
                 .filter_map(|m| prev.keypoints.get(m.train_idx))
-                .map(|k| (crate::matching::py_int(k.x), crate::matching::py_int(k.y)))
+                .map(|k| (siftlab_core::matching::py_int(k.x), siftlab_core::matching::py_int(k.y)))
                 .collect(),
             distances: Vec::new(),
         })
@@ -586,9 +586,9 @@ fn diagnose_info(matches: &[DMatch], info: &MatchInfo, got: &Json, prev: &Featur
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mark::json::parse;
-    use crate::mark::reference::reference;
-    use crate::sift::KeyPoint;
+    use crate::json::parse;
+    use crate::reference::reference;
+    use siftlab_core::sift::KeyPoint;
 
     /// A pair whose distances take few values (ties and thresholds hit exactly).
     fn pair() -> (Features, Features) {

@@ -17,14 +17,14 @@
 //! }
 //! ```
 
-use super::cases::{plan, Case, Task};
-use super::diagnose::{failed_call, judge, CaseResult, Diagnosis};
-use super::protocol::{call_message, load_message, pair_message, parse_line, with_id, ErrorKind, HarnessLine, Pair};
-use super::protocol::{Reply, MAX_MESSAGE_CHARS};
-use super::reference::{reference, Expected};
-use super::report::Marks;
-use super::source::Rejection;
-use crate::error::Result;
+use crate::cases::{plan, Case, Task};
+use crate::diagnose::{failed_call, judge, CaseResult, Diagnosis};
+use crate::protocol::{call_message, load_message, pair_message, parse_line, with_id, ErrorKind, HarnessLine, Pair};
+use crate::protocol::{Reply, MAX_MESSAGE_CHARS};
+use crate::reference::{reference, Expected};
+use crate::report::Marks;
+use crate::source::Rejection;
+use siftlab_core::error::Result;
 use std::collections::BTreeSet;
 
 /// The lab's limits, in seconds of the call's CPU time (natively; the
@@ -281,7 +281,7 @@ impl Session {
             },
             _ => None,
         };
-        let crash = |why: &str| Diagnosis::Crashed(super::escape::escaped(why, MAX_MESSAGE_CHARS));
+        let crash = |why: &str| Diagnosis::Crashed(crate::escape::escaped(why, MAX_MESSAGE_CHARS));
         match waiting {
             Waiting::Nothing => {}
             Waiting::Load => {
@@ -374,7 +374,7 @@ fn task_index(task: Task) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sift::{Features, KeyPoint};
+    use siftlab_core::sift::{Features, KeyPoint};
 
     struct Fake(Vec<Pair>);
 
@@ -437,8 +437,8 @@ mod tests {
         assert_eq!(m.tasks.iter().map(|t| (t.calls, t.errors)).collect::<Vec<_>>(), [(2, 2); 4]);
         // One start, then one after each of the 8 failed calls but the last.
         assert_eq!(starts, 8);
-        let text = super::super::report::report_text(&m);
-        assert!(super::super::escape::is_clean(&text), "{text}");
+        let text = crate::report::report_text(&m);
+        assert!(crate::escape::is_clean(&text), "{text}");
     }
 
     #[test]
