@@ -215,7 +215,7 @@ mod tests {
 
     /// The bundled real KITTI frames.
     fn fixture() -> Dataset {
-        Dataset::open(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../www/demo/MyKITTI")).unwrap()
+        Dataset::open(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../../www/demo/MyKITTI")).unwrap()
     }
 
     fn tmp(name: &str) -> PathBuf {
