@@ -878,6 +878,9 @@ test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI 
   assert.equal(got.total, '20.00', JSON.stringify(got));
   assert.deepEqual(got, cliMarks(cliMark('good', MARK_N, 1)));
   await page.elementScreenshot(tid('mark'), shot('mark-good.png'));
+  // The introduction is body text, not bold (it once inherited the ✓ marks' weight).
+  const weight = await page.evaluate((sel) => getComputedStyle(document.querySelector(sel)).fontWeight, tid('mark-intro'));
+  assert.ok(Number(weight) < 600, `the introduction's font-weight is ${weight}`);
   await markFile('inverted', MARK_N, 1);
   const bad = await pageMarks();
   assert.deepEqual(bad, cliMarks(cliMark('inverted', MARK_N, 1)));

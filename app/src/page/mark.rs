@@ -150,14 +150,15 @@ pub fn MarkMyCode() -> impl IntoView {
     };
 
     view! {
-        <section class="card mark" aria-label="Mark my code" data-testid="mark">
+        <section class="card mark-view" aria-label="Mark my code" data-testid="mark">
             <h2>"Mark my code"</h2>
-            <p class="muted">
+            <p class="muted" data-testid="mark-intro">
                 "Your "<code>"vision_tasks.py"</code>" runs here, in Python compiled to WebAssembly (Pyodide), with siftlab's "
                 <code>"cv2"</code>" (SIFT and "<code>"BFMatcher().knnMatch"</code>" exactly as OpenCV 4.8) and the lab's "
                 <code>"vision_tasks_base"</code>", and is marked as the lab's automarker marks it: each function on random "
                 "valid calls (frame pairs of the loaded frames), 10 s a call, 0.5 marks per task for no runtime error plus 4.5 × the "
-                "share of exactly right values, 20 in all. Nothing leaves this page."
+                "share of exactly right values, 20 in all. Nothing leaves this page: your code runs under the page's security "
+                "policy, which lets it reach no other site."
             </p>
             <div class="row wrap">
                 <label class="ctl">

@@ -7,13 +7,11 @@
 //! the per-frame counts as JSON Lines.
 
 use siftlab_core::dataset::Dataset;
-use siftlab_core::dataset::PoseRow;
 use siftlab_core::error::{Error, Result};
-use siftlab_core::image::GrayImage;
 use siftlab_core::matching::Strategy;
 use siftlab_core::render::plot::figures::{report_figure, run_style, Run};
 use siftlab_core::render::plot::{raster::rasterize, svg::to_svg};
-use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
+use siftlab_core::sift::SiftParams;
 use siftlab_core::vo::export::{kitti_text, tum_text};
 use siftlab_core::vo::matched::MatchedOdometry;
 use siftlab_core::vo::metrics::{ate_rmse, describe_kitti_segments, evaluate, kitti_segments, TrajectoryMetrics};
@@ -90,40 +88,6 @@ fn open_trace(path: &Path) -> Result<std::fs::File> {
         .map_err(|e| Error::Dataset(format!("cannot write the trace to {}: {e}", path.display())))
 }
 
-/// The matcher-driven loop of `vo::matched::run_matched` with the SIFT
-/// parameters the flags ask for: the next frame is read and its SIFT
-/// computed on another thread while this one matches the current pair.
-fn run_matched_with(
-    odo: &mut MatchedOdometry,
-    n: usize,
-    poses: &[PoseRow],
-    load: impl FnMut(usize) -> Result<GrayImage> + Send,
-    params: &SiftParams,
-    progress: &mut dyn FnMut(usize, usize),
-) -> Result<Vec<StepResult>> {
-    let mut out = Vec::with_capacity(n);
-    let mut load = load;
-    std::thread::scope(|s| -> Result<()> {
-        let (tx, rx) = std::sync::mpsc::sync_channel::<Result<Features>>(1);
-        s.spawn(move || {
-            for i in 0..n {
-                let f = load(i).map(|img| detect_and_compute(&img, params));
-                let failed = f.is_err();
-                if tx.send(f).is_err() || failed {
-                    break;
-                }
-            }
-        });
-        for i in 0..n {
-            let f = rx.recv().map_err(|_| Error::Odometry(format!("frame {i} could not be read")))??;
-            out.push(odo.step_features(f, poses.get(i))?);
-            progress(i + 1, n);
-        }
-        Ok(())
-    })?;
-    Ok(out)
-}
-
 /// Runs the VO on the first frames, writes `out_png` (the lab's window) and
 /// whatever `opts` asks for. Returns the text to print (on stderr) and the metrics.
 pub fn view_trajectory(
@@ -148,7 +112,7 @@ pub fn view_trajectory(
         }
         Some(s) => {
             let mut odo = MatchedOdometry::new(*ds.camera(), *s)?;
-            run_matched_with(&mut odo, n, ds.poses(), |i| ds.load_frame(i), &params, progress)?
+            siftlab_core::vo::run_matched(&mut odo, n, ds.poses(), |i| ds.load_frame(i), &params, progress)?
         }
     };
 

@@ -156,17 +156,19 @@ impl MatchedOdometry {
     }
 }
 
-/// Runs the loop over frames `0..n`, loading each with `load(i)`; natively
-/// the next frame is read and its SIFT computed on another thread while this
-/// one matches the current pair. `progress` gets (done, total) after every frame.
+/// Runs the loop over frames `0..n`, loading each with `load(i)` and SIFT at
+/// `params` (the CLI's `--opencv-lanes`; `SiftParams::for_host()` is the
+/// width OpenCV would use here); natively the next frame is read and its SIFT
+/// computed on another thread while this one matches the current pair.
+/// `progress` gets (done, total) after every frame.
 pub fn run_matched(
     odo: &mut MatchedOdometry,
     n: usize,
     poses: &[PoseRow],
     load: impl FnMut(usize) -> Result<GrayImage> + Send,
+    params: &SiftParams,
     progress: &mut dyn FnMut(usize, usize),
 ) -> Result<Vec<StepResult>> {
-    let params = SiftParams::for_host();
     let mut out = Vec::with_capacity(n);
     #[cfg(not(target_arch = "wasm32"))]
     {
@@ -175,7 +177,7 @@ pub fn run_matched(
             let (tx, rx) = std::sync::mpsc::sync_channel::<Result<Features>>(1);
             s.spawn(move || {
                 for i in 0..n {
-                    let f = load(i).map(|img| detect_and_compute(&img, &params));
+                    let f = load(i).map(|img| detect_and_compute(&img, params));
                     let failed = f.is_err();
                     if tx.send(f).is_err() || failed {
                         break;
@@ -194,7 +196,7 @@ pub fn run_matched(
     {
         let mut load = load;
         for i in 0..n {
-            let f = detect_and_compute(&load(i)?, &params);
+            let f = detect_and_compute(&load(i)?, params);
             out.push(odo.step_features(f, poses.get(i))?);
             progress(i + 1, n);
         }
