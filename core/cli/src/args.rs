@@ -49,8 +49,30 @@ pub enum Command {
 
 #[derive(Args, Debug)]
 pub struct MarkArgs {
-    /// The student's vision_tasks.py.
-    pub file: PathBuf,
+    /// The student's vision_tasks.py; with --out, any number of files and folders (a folder
+    /// with vision_tasks.py at its top is one student, any other holds one per sub-folder or
+    /// <student id>.py); with --merge, shard output folders.
+    #[arg(required = true, value_name = "SUBMISSION")]
+    pub files: Vec<PathBuf>,
+    /// Mark a whole class into DIR: grades.csv and, per student, report.txt, report.json and
+    /// Gradescope's results.json.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Students marked at once (default: the cores available), each in a sandbox of its own.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=256))]
+    pub jobs: Option<u32>,
+    /// Skip a student whose report.json records the same seed, n, dataset, file and siftlab.
+    #[arg(long)]
+    pub resume: bool,
+    /// Mark only the I-th of K disjoint slices of the class (by student id), e.g. 2/3.
+    #[arg(long, value_name = "I/K")]
+    pub shard: Option<String>,
+    /// Join the grades.csv of shard output folders (the SUBMISSION arguments) into --out.
+    #[arg(long)]
+    pub merge: bool,
+    /// Write Gradescope's results.json for one submission (a file, or a folder holding vision_tasks.py).
+    #[arg(long, value_name = "RESULTS_JSON")]
+    pub gradescope: Option<PathBuf>,
     /// Calls per task (the lab's marking: 25).
     #[arg(short = 'n', long = "cases", default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub n: u32,

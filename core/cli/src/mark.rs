@@ -10,13 +10,14 @@
 
 use crate::args::{Cli, MarkArgs};
 use crate::common::{open_dataset, sift_params};
+use crate::report_files::{atomic_write, gradescope_json, sha256_hex};
 use crate::sandbox::{self, Python};
 use siftlab_core::dataset::Dataset;
 use siftlab_core::error::{Error, Result};
 use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
 use siftlab_mark::{
-    check_source, escaped, knn_answer, parse_line, report_json, report_text, HarnessLine, Limits, Marks, Outcome, Pair,
-    Pairs, Session, Status, Step, Task, MAX_LINE_BYTES,
+    check_source, escaped, knn_answer, parse_line, report_json, report_text, Case, HarnessLine, Limits, Marks, Outcome,
+    Pair, Pairs, Session, Status, Step, Task, MAX_LINE_BYTES,
 };
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -33,6 +34,18 @@ const STDERR_TAIL: usize = 2000;
 
 /// Runs `mark` and returns the exit status.
 pub fn main(cli: &Cli, a: &MarkArgs) -> i32 {
+    if a.merge {
+        return match &a.out {
+            Some(out) => crate::class::merge(a, out),
+            None => {
+                eprintln!("siftlab: error: --merge needs --out DIR, the folder for the joined grades.csv");
+                2
+            }
+        };
+    }
+    if let Some(out) = &a.out {
+        return crate::class::run(cli, a, out);
+    }
     match run(cli, a) {
         Ok(m) if m.full() => 0,
         Ok(_) => 1,
@@ -43,12 +56,34 @@ pub fn main(cli: &Cli, a: &MarkArgs) -> i32 {
     }
 }
 
-/// Marks the file and prints the report (text, or JSON with `--json`).
+/// Marks one file and prints the report (text, or JSON with `--json`);
+/// with `--gradescope`, also writes Gradescope's results.json.
 pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
-    let name = a.file.file_name().map_or_else(|| a.file.display().to_string(), |n| n.to_string_lossy().into_owned());
+    let [arg] = a.files.as_slice() else {
+        return Err(Error::InvalidArgument(format!(
+            "{} submissions given: mark one file, or a class with --out DIR",
+            a.files.len()
+        )));
+    };
+    if a.jobs.is_some() || a.resume || a.shard.is_some() {
+        return Err(Error::InvalidArgument("--jobs, --resume and --shard go with --out DIR (a class)".into()));
+    }
+    // A folder (Gradescope's /autograder/submission): its first vision_tasks.py.
+    let file = if arg.is_dir() { crate::class::first_found(arg) } else { Some(arg.clone()) };
     let n = a.n as usize;
+    let Some(file) = file else {
+        let marks = Marks::new(a.seed, n, Vec::new());
+        eprintln!("siftlab: {} scores 0: no vision_tasks.py in it", arg.display());
+        if let Some(g) = &a.gradescope {
+            let text =
+                format!("{}: 0.00 / 20\nscores 0: no vision_tasks.py was found in the submission\n", arg.display());
+            atomic_write(g, gradescope_json(&marks, &text, true).as_bytes())?;
+        }
+        return Ok(marks);
+    };
+    let name = file.file_name().map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
     let bytes =
-        std::fs::read(&a.file).map_err(|e| Error::InvalidArgument(format!("cannot read {}: {e}", a.file.display())))?;
+        std::fs::read(&file).map_err(|e| Error::InvalidArgument(format!("cannot read {}: {e}", file.display())))?;
     let marks = match check_source(&bytes) {
         Err(rejection) => {
             eprintln!("siftlab: {name} scores 0: {rejection}");
@@ -66,22 +101,75 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
             );
             let mut pairs = Frames { ds, params: sift_params(cli), frames: HashMap::new(), pairs: Vec::new() };
             let session = Session::new(source, a.seed, n, &frames, Limits::default());
-            runner.mark(session, &mut pairs)?
+            runner.mark(session, &mut pairs, 0, true)?
         }
     };
+    let text = format!("{}: {:.2} / 20\n{}", escaped(&name, 200), marks.total, report_text(&marks));
     let mut out = std::io::stdout().lock();
     if a.json {
         let _ = writeln!(out, "{}", report_json(&marks));
     } else {
-        let _ = writeln!(out, "{}: {:.2} / 20", escaped(&name, 200), marks.total);
-        let _ = write!(out, "{}", report_text(&marks));
+        let _ = write!(out, "{text}");
     }
     let _ = out.flush();
+    if let Some(g) = &a.gradescope {
+        atomic_write(g, gradescope_json(&marks, &text, false).as_bytes())?;
+    }
     Ok(marks)
 }
 
+/// The pairs the cases use, SIFT of each frame once, and a fingerprint of
+/// the frames (SHA-256 over their pixels) for `--resume`.
+pub(crate) fn frame_pairs(ds: &Dataset, params: &SiftParams, cases: &[Case]) -> Result<(Vec<Pair>, String)> {
+    let ids: std::collections::BTreeSet<u32> = cases.iter().map(Case::frame).collect();
+    let mut frames: HashMap<u32, Features> = HashMap::new();
+    let mut fingerprint = Vec::new();
+    for &f in &ids {
+        for g in [f - 1, f] {
+            if let std::collections::hash_map::Entry::Vacant(e) = frames.entry(g) {
+                let img = ds.load_frame(g as usize)?;
+                let mut bytes = format!("{g}:{}x{}:", img.width(), img.height()).into_bytes();
+                bytes.extend_from_slice(img.data());
+                fingerprint.extend_from_slice(sha256_hex(&bytes).as_bytes());
+                e.insert(detect_and_compute(&img, params));
+            }
+        }
+    }
+    let pairs = ids.iter().map(|&f| Pair { id: f, prev: frames[&(f - 1)].clone(), cur: frames[&f].clone() }).collect();
+    Ok((pairs, sha256_hex(&fingerprint)))
+}
+
+/// The pairs computed so far (each knn request names one the harness was sent).
+trait Known {
+    fn known(&self) -> &[Pair];
+}
+
+/// Pairs computed beforehand, shared by the jobs of a class marking.
+struct Shared<'a>(&'a [Pair]);
+
+impl Known for Shared<'_> {
+    fn known(&self) -> &[Pair] {
+        self.0
+    }
+}
+
+impl Known for Frames {
+    fn known(&self) -> &[Pair] {
+        &self.pairs
+    }
+}
+
+impl Pairs for Shared<'_> {
+    fn pair(&mut self, frame: u32) -> Result<&Pair> {
+        self.0
+            .iter()
+            .find(|p| p.id == frame)
+            .ok_or_else(|| Error::InvalidArgument(format!("frame pair {frame} was not computed")))
+    }
+}
+
 /// FRAME_IDs 1.. whose frame and previous frame are in the dataset.
-fn frame_ids(ds: &Dataset) -> Result<Vec<u32>> {
+pub(crate) fn frame_ids(ds: &Dataset) -> Result<Vec<u32>> {
     let count = ds.frame_count() as u32;
     if count < 2 {
         return Err(Error::Dataset(format!(
@@ -120,14 +208,14 @@ impl Pairs for Frames {
 
 /// Starts harness processes: the interpreter found outside, the harness
 /// files, sandboxed or (with `--no-sandbox`) not.
-struct Runner {
+pub(crate) struct Runner {
     python: Python,
     dir: TempDir,
     sandbox: bool,
 }
 
 impl Runner {
-    fn new(no_sandbox: bool) -> Result<Runner> {
+    pub(crate) fn new(no_sandbox: bool) -> Result<Runner> {
         let exe = std::env::var_os("SIFTLAB_PYTHON").unwrap_or_else(|| "python3".into());
         let python = Python::find(&exe)?;
         let dir = TempDir::new()?;
@@ -160,21 +248,39 @@ impl Runner {
         Ok(Runner { python, dir, sandbox: !no_sandbox })
     }
 
-    fn mark(&self, mut session: Session, pairs: &mut Frames) -> Result<Marks> {
-        eprintln!(
-            "python: {} (Python {}, {}), {}",
-            self.python.exe.display(),
-            self.python.version,
-            self.python.numpy.as_ref().map_or("no numpy".into(), |v| format!("numpy {v}")),
-            if self.sandbox { "sandboxed (bubblewrap)" } else { "NOT sandboxed" }
-        );
+    /// Marks `source` on pairs computed beforehand (those of the plan of
+    /// `seed`, `n`, `frames`), printing nothing; `job` picks the sandbox's uid
+    /// (one per concurrent job).
+    pub(crate) fn mark_quietly(
+        &self,
+        source: &str,
+        seed: u64,
+        n: usize,
+        frames: &[u32],
+        pairs: &[Pair],
+        job: u32,
+    ) -> Result<Marks> {
+        let session = Session::new(source, seed, n, frames, Limits::default());
+        self.mark(session, &mut Shared(pairs), job, false)
+    }
+
+    fn mark<P: Pairs + Known>(&self, mut session: Session, pairs: &mut P, job: u32, verbose: bool) -> Result<Marks> {
+        if verbose {
+            eprintln!(
+                "python: {} (Python {}, {}), {}",
+                self.python.exe.display(),
+                self.python.version,
+                self.python.numpy.as_ref().map_or("no numpy".into(), |v| format!("numpy {v}")),
+                if self.sandbox { "sandboxed (bubblewrap)" } else { "NOT sandboxed" }
+            );
+        }
         let mut harness: Option<Harness> = None;
         let mut task = None;
         let mut task_started = Instant::now();
         loop {
             let current = session.current().map(|c| c.task());
             if current != task {
-                if let Some(t) = task {
+                if let (Some(t), true) = (task, verbose) {
                     report_task(&session, t, task_started);
                 }
                 task = current;
@@ -183,14 +289,14 @@ impl Runner {
             match session.next(pairs)? {
                 Step::Start => {
                     drop(harness.take());
-                    harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox)?);
+                    harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox, job)?);
                     session.started();
                 }
                 Step::Send { id, line, limit, .. } => {
                     let Some(h) = harness.as_mut() else {
                         return Err(Error::InvalidArgument("no harness is running".into()));
                     };
-                    let outcome = h.request(&line, id, limit, &pairs.pairs, &mut session.stray_lines);
+                    let outcome = h.request(&line, id, limit, pairs.known(), &mut session.stray_lines);
                     if !matches!(outcome, Outcome::Reply(..)) {
                         drop(harness.take());
                     }
@@ -200,10 +306,10 @@ impl Runner {
                     if let Some(h) = harness.take() {
                         h.close();
                     }
-                    if let Some(r) = &marks.rejection {
+                    if let (Some(r), true) = (&marks.rejection, verbose) {
                         eprintln!("siftlab: the file scores 0: {r}");
                     }
-                    if session.stray_lines > 0 {
+                    if session.stray_lines > 0 && verbose {
                         eprintln!(
                             "siftlab: {} line(s) from the file's process were no reply and were dropped",
                             session.stray_lines
@@ -246,9 +352,9 @@ struct Harness {
 }
 
 impl Harness {
-    fn start(python: &Python, dir: &std::path::Path, sandbox: bool) -> Result<Harness> {
+    fn start(python: &Python, dir: &std::path::Path, sandbox: bool, job: u32) -> Result<Harness> {
         let mut child = python
-            .command(dir, sandbox)
+            .command(dir, sandbox, job)
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())

@@ -14,8 +14,9 @@ use std::process::{Command, Stdio};
 
 /// Where the harness lives inside the sandbox.
 pub const BOX: &str = "/box";
-/// The uid the harness takes when siftlab runs as root (RLIMIT_NPROC does
-/// not hold for root): one no account uses.
+/// The uid the harness of job 0 takes when siftlab runs as root
+/// (RLIMIT_NPROC does not hold for root): one no account uses; job j takes
+/// MARK_UID + j, so the process limit of one student's sandbox is its own.
 pub const MARK_UID: u32 = 61_000;
 
 /// Limits on the whole sandbox.
@@ -163,7 +164,7 @@ impl Python {
     /// The command that runs `harness_dir/siftlab_harness.py` sandboxed
     /// (`sandbox`) or as a plain child (`--no-sandbox`), with the limits
     /// set before it starts.
-    pub fn command(&self, harness_dir: &Path, sandbox: bool) -> Command {
+    pub fn command(&self, harness_dir: &Path, sandbox: bool, job: u32) -> Command {
         let root = is_root();
         let mut harness_args: Vec<OsString> = vec!["-I".into(), "-S".into(), "-B".into(), "-u".into()];
         let mut cmd = if sandbox {
@@ -201,7 +202,7 @@ impl Python {
             c.arg(&self.exe);
             harness_args.push(format!("{BOX}/siftlab_harness.py").into());
             if root {
-                harness_args.extend(["--drop-uid".into(), MARK_UID.to_string().into()]);
+                harness_args.extend(["--drop-uid".into(), (MARK_UID + job).to_string().into()]);
             }
             c
         } else {
@@ -244,7 +245,7 @@ impl Python {
 /// Whether bubblewrap can build the sandbox here (a real run of `true`
 /// through it); `Err` says why not.
 pub fn check(python: &Python, harness_dir: &Path) -> std::result::Result<(), String> {
-    let mut c = python.command(harness_dir, true);
+    let mut c = python.command(harness_dir, true, 0);
     // The same sandbox, running the interpreter's `-c pass` instead of the harness.
     let args: Vec<OsString> = c.get_args().map(OsString::from).collect();
     let cut = args.iter().position(|a| a == "--").map_or(args.len(), |i| i + 1);

@@ -1,0 +1,369 @@
+//! Marking a whole class (docs/marking.md, "A whole class"):
+//! `siftlab mark SUBMISSIONS... --out DIR [--jobs N] [--resume] [--shard I/K]`,
+//! `siftlab mark --merge DIR... --out DIR` and
+//! `siftlab mark SUBMISSION --gradescope RESULTS_JSON`.
+//!
+//! Every student gets the same cases (one seed): the frames' SIFT is computed
+//! once per run and shared by the jobs; each job marks one student at a time
+//! in a sandbox of its own (its own uid, so one student's processes never
+//! count against another's limit). Each student's files are written
+//! atomically when that student is done; grades.csv at the end.
+
+use crate::args::{Cli, MarkArgs};
+use crate::mark::{frame_ids, frame_pairs, Runner};
+use crate::report_files::{atomic_write, gradescope_json, Row, Status};
+use siftlab_core::error::{Error, Result};
+use siftlab_mark::{check_source, escaped, parse_json, plan, report_json, report_text, Json, Marks, Pair};
+use std::collections::BTreeMap;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::mpsc::channel;
+use std::time::Instant;
+
+/// One student of the class: an id and the file that is marked.
+#[derive(Clone, Debug)]
+pub struct Student {
+    pub id: String,
+    /// `None`: a folder without a vision_tasks.py (scores 0, "none found").
+    pub file: Option<PathBuf>,
+}
+
+/// The students SUBMISSIONS name, sorted by id (bytes), and the names refused with why.
+pub fn discover(args: &[PathBuf]) -> (Vec<Student>, Vec<(String, String)>) {
+    let mut found: Vec<(Student, PathBuf)> = Vec::new();
+    let mut refused: Vec<(String, String)> = Vec::new();
+    for arg in args {
+        let name = |p: &Path| p.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        if arg.is_file() {
+            let id = if name(arg) == "vision_tasks.py" {
+                arg.canonicalize().ok().and_then(|p| p.parent().map(name)).unwrap_or_default()
+            } else {
+                arg.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default()
+            };
+            found.push((Student { id, file: Some(arg.clone()) }, arg.clone()));
+        } else if arg.join("vision_tasks.py").is_file() {
+            let id = arg.canonicalize().map(|p| name(&p)).unwrap_or_else(|_| name(arg));
+            found.push((Student { id, file: Some(arg.join("vision_tasks.py")) }, arg.clone()));
+        } else if let Ok(rd) = std::fs::read_dir(arg) {
+            let mut entries: Vec<PathBuf> = rd.flatten().map(|e| e.path()).collect();
+            entries.sort_by(|a, b| a.as_os_str().as_encoded_bytes().cmp(b.as_os_str().as_encoded_bytes()));
+            for p in entries {
+                let n = name(&p);
+                if ignored(&n) {
+                    continue;
+                }
+                if p.is_dir() {
+                    found.push((Student { id: n, file: first_found(&p) }, p.clone()));
+                } else if let Some(id) = n.strip_suffix(".py") {
+                    found.push((Student { id: id.to_string(), file: Some(p.clone()) }, p.clone()));
+                } else {
+                    refused.push((n, "neither a folder nor a .py file".into()));
+                }
+            }
+        } else {
+            refused.push((arg.display().to_string(), "no such file or folder".into()));
+        }
+    }
+    let mut by_id: BTreeMap<String, Vec<(Student, PathBuf)>> = BTreeMap::new();
+    for (s, from) in found {
+        by_id.entry(s.id.clone()).or_default().push((s, from));
+    }
+    let mut students = Vec::new();
+    for (id, mut list) in by_id {
+        if let Some(why) = odd_id(&id) {
+            refused.push((escaped(&id, 80), why));
+        } else if list.len() > 1 {
+            let places: Vec<String> = list.iter().map(|(_, p)| p.display().to_string()).collect();
+            refused.push((id, format!("duplicate student id: {}", places.join(" and "))));
+        } else if let Some((s, _)) = list.pop() {
+            students.push(s);
+        }
+    }
+    (students, refused)
+}
+
+/// Names the lab's marker passes over: dot-entries and macOS's archive folders.
+fn ignored(name: &str) -> bool {
+    name.starts_with('.') || name == "__MACOSX"
+}
+
+/// Why `id` cannot name a student's folder and row, if it cannot.
+fn odd_id(id: &str) -> Option<String> {
+    let ok_char = |c: char| c.is_ascii_alphanumeric() || "._-@+".contains(c);
+    if id.is_empty()
+        || id.len() > 128
+        || !id.chars().all(ok_char)
+        || !id.starts_with(|c: char| c.is_ascii_alphanumeric())
+    {
+        return Some("odd characters in the student id (letters, digits and . _ - @ + only, a letter or digit first, at most 128)".into());
+    }
+    None
+}
+
+/// The first vision_tasks.py under `dir`, as the lab's marker takes it:
+/// shallowest first, then by byte-sorted path; dot-entries and __MACOSX skipped.
+pub fn first_found(dir: &Path) -> Option<PathBuf> {
+    let mut level = vec![dir.to_path_buf()];
+    for _ in 0..16 {
+        let mut files = Vec::new();
+        let mut next = Vec::new();
+        for d in &level {
+            let Ok(rd) = std::fs::read_dir(d) else { continue };
+            for e in rd.flatten() {
+                let n = e.file_name().to_string_lossy().into_owned();
+                if ignored(&n) {
+                    continue;
+                }
+                let p = e.path();
+                if p.is_dir() {
+                    next.push(p);
+                } else if n == "vision_tasks.py" {
+                    files.push(p);
+                }
+            }
+        }
+        let bytes = |p: &PathBuf| p.as_os_str().as_encoded_bytes().to_vec();
+        if let Some(f) = files.into_iter().min_by_key(bytes) {
+            return Some(f);
+        }
+        if next.is_empty() {
+            return None;
+        }
+        level = next;
+    }
+    None
+}
+
+/// `I/K` as (I, K), 1 ≤ I ≤ K.
+fn parse_shard(text: &str) -> Result<(usize, usize)> {
+    let bad = || Error::InvalidArgument(format!("--shard {text}: write it I/K with 1 <= I <= K, e.g. 2/3"));
+    let (i, k) = text.split_once('/').ok_or_else(bad)?;
+    let (i, k): (usize, usize) = (i.trim().parse().map_err(|_| bad())?, k.trim().parse().map_err(|_| bad())?);
+    if i == 0 || k == 0 || i > k {
+        return Err(bad());
+    }
+    Ok((i, k))
+}
+
+/// What a run records of itself in each report.json, for `--resume`.
+struct RunKey {
+    seed: u64,
+    n: usize,
+    dataset: String,
+    frames: Vec<u32>,
+}
+
+/// `siftlab mark SUBMISSIONS... --out DIR`: exit 0 when every student is
+/// marked, 1 when some failed, 2 when the class cannot be marked at all.
+pub fn run(cli: &Cli, a: &MarkArgs, out: &Path) -> i32 {
+    match run_class(cli, a, out) {
+        Ok(rows) if rows.iter().all(|r| r.status != Status::Failed) => 0,
+        Ok(_) => 1,
+        Err(e) => {
+            eprintln!("siftlab: error: {e}");
+            2
+        }
+    }
+}
+
+fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
+    let (mut students, refused) = discover(&a.files);
+    for (name, why) in &refused {
+        eprintln!("siftlab: refused {name}: {why}");
+    }
+    if let Some(s) = &a.shard {
+        let (i, k) = parse_shard(s)?;
+        students = students.into_iter().enumerate().filter(|(j, _)| j % k == i - 1).map(|(_, s)| s).collect();
+    }
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", out.display())))?;
+    let n = a.n as usize;
+    let ds = crate::common::open_dataset(cli)?;
+    let frames = frame_ids(&ds)?;
+    let cases = plan(a.seed, n, &frames);
+    let t0 = Instant::now();
+    let (pairs, dataset) = frame_pairs(&ds, &crate::common::sift_params(cli), &cases)?;
+    drop(cases);
+    let key = RunKey { seed: a.seed, n, dataset, frames };
+    let runner = Runner::new(a.no_sandbox)?;
+    let jobs = a.jobs.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |j| j as usize);
+    eprintln!(
+        "marking {} student(s) into {}: {n} calls per task, seed {}, {} job(s); SIFT of {} frame pair(s) in {:.1} s",
+        students.len(),
+        out.display(),
+        a.seed,
+        jobs,
+        pairs.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    let mut rows: BTreeMap<String, Row> = BTreeMap::new();
+    let mut todo = Vec::new();
+    for s in students {
+        match a.resume.then(|| resumed(out, &s, &key)).flatten() {
+            Some(row) => {
+                eprintln!("{}: {:.2} ({}), kept from an earlier run", row.student, row.total, row.status_text());
+                rows.insert(row.student.clone(), row);
+            }
+            None => todo.push(s),
+        }
+    }
+    let next = AtomicUsize::new(0);
+    let (tx, rx) = channel::<Row>();
+    let total = todo.len();
+    let started = Instant::now();
+    let terminal = std::io::stderr().is_terminal();
+    std::thread::scope(|scope| {
+        for job in 0..jobs.min(total.max(1)) {
+            let (tx, next, todo, runner, pairs, key) = (tx.clone(), &next, &todo, &runner, &pairs, &key);
+            scope.spawn(move || loop {
+                let i = next.fetch_add(1, Ordering::SeqCst);
+                let Some(s) = todo.get(i) else { break };
+                let row = mark_student(s, out, runner, pairs, key, job as u32);
+                if tx.send(row).is_err() {
+                    break;
+                }
+            });
+        }
+        drop(tx);
+        for (done, row) in rx.iter().enumerate() {
+            let done = done + 1;
+            let mut line = format!("[{done}/{total}] {}: {:.2} ({})", row.student, row.total, row.status_text());
+            if terminal && done < total {
+                let left = started.elapsed().as_secs_f64() / done as f64 * (total - done) as f64;
+                line.push_str(&format!(", about {} left", minutes(left)));
+            }
+            eprintln!("{line}");
+            rows.insert(row.student.clone(), row);
+        }
+    });
+    let rows: Vec<Row> = rows.into_values().collect();
+    atomic_write(&out.join("grades.csv"), Row::csv(&rows).as_bytes())?;
+    let failed = rows.iter().filter(|r| r.status == Status::Failed).count();
+    eprintln!(
+        "grades: {} ({} student(s), {failed} failed) in {:.1} s",
+        out.join("grades.csv").display(),
+        rows.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(rows)
+}
+
+fn minutes(secs: f64) -> String {
+    let s = secs.round() as u64;
+    if s >= 60 {
+        format!("{}m{:02}s", s / 60, s % 60)
+    } else {
+        format!("{s}s")
+    }
+}
+
+/// The row of a report.json written by a run with the same key, for the
+/// same file, by this siftlab.
+fn resumed(out: &Path, s: &Student, key: &RunKey) -> Option<Row> {
+    let text = std::fs::read_to_string(out.join(&s.id).join("report.json")).ok()?;
+    let j = parse_json(&text).ok()?;
+    let str_of = |k: &str| j.get(k).and_then(Json::as_str).map(str::to_string);
+    let sha = s.file.as_ref().and_then(|f| std::fs::read(f).ok()).map(|b| crate::report_files::sha256_hex(&b));
+    let same = j.get("seed").and_then(Json::as_i64).map(|v| v as u64) == Some(key.seed)
+        && j.get("cases_per_task").and_then(Json::as_i64) == Some(key.n as i64)
+        && str_of("dataset").as_deref() == Some(key.dataset.as_str())
+        && str_of("sha256") == Some(sha.unwrap_or_default())
+        && str_of("siftlab").as_deref() == Some(env!("CARGO_PKG_VERSION"));
+    let row = Row::from_report(&s.id, &j)?;
+    (same && row.status != Status::Failed).then_some(row)
+}
+
+/// Marks one student and writes its three files; the row for grades.csv.
+fn mark_student(s: &Student, out: &Path, runner: &Runner, pairs: &[Pair], key: &RunKey, job: u32) -> Row {
+    let dir = out.join(&s.id);
+    let result = (|| -> Result<(Marks, Status, String, String)> {
+        let Some(file) = &s.file else {
+            return Ok((Marks::new(key.seed, key.n, Vec::new()), Status::Zero, "none found".into(), String::new()));
+        };
+        let bytes =
+            std::fs::read(file).map_err(|e| Error::InvalidArgument(format!("cannot read {}: {e}", file.display())))?;
+        let sha = crate::report_files::sha256_hex(&bytes);
+        let marks = match check_source(&bytes) {
+            Err(r) => Marks::rejected(key.seed, key.n, r),
+            Ok(source) => runner.mark_quietly(source, key.seed, key.n, &key.frames, pairs, job)?,
+        };
+        let (status, reason) = match &marks.rejection {
+            Some(r) => (Status::Zero, crate::report_files::zero_reason(r)),
+            None => (Status::Ok, String::new()),
+        };
+        Ok((marks, status, reason, sha))
+    })();
+    let (marks, status, reason, sha) = match result {
+        Ok(v) => v,
+        Err(e) => {
+            (Marks::new(key.seed, key.n, Vec::new()), Status::Failed, escaped(&e.to_string(), 300), String::new())
+        }
+    };
+    let row = Row::of(&s.id, &marks, status, &reason);
+    let head = format!(
+        "{{\"student\": {}, \"status\": \"{}\", \"reason\": {}, \"sha256\": \"{sha}\", \"dataset\": \"{}\", \"siftlab\": \"{}\", ",
+        Json::Str(s.id.clone()).to_json(),
+        status.name(),
+        Json::Str(reason.clone()).to_json(),
+        key.dataset,
+        env!("CARGO_PKG_VERSION")
+    );
+    let report = report_json(&marks);
+    let json = format!("{head}{}\n", report.strip_prefix('{').unwrap_or(&report));
+    let mut text = format!("{}: {:.2} / 20\n", s.id, marks.total);
+    match status {
+        Status::Zero if s.file.is_none() => text.push_str("scores 0: no vision_tasks.py was found in the submission\n"),
+        Status::Failed => text.push_str(&format!("could not be marked: {reason}\n")),
+        _ => text.push_str(&report_text(&marks)),
+    }
+    let files = [
+        ("report.json", json),
+        ("report.txt", text.clone()),
+        ("results.json", gradescope_json(&marks, &text, s.file.is_none())),
+    ];
+    let written = std::fs::create_dir_all(&dir)
+        .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", dir.display())))
+        .and_then(|_| files.iter().try_for_each(|(name, body)| atomic_write(&dir.join(name), body.as_bytes())));
+    match written {
+        Ok(()) => row,
+        Err(e) => Row::of(&s.id, &marks, Status::Failed, &escaped(&e.to_string(), 300)),
+    }
+}
+
+/// `siftlab mark --merge DIR... --out DIR`: the shards' grades.csv as one.
+pub fn merge(a: &MarkArgs, out: &Path) -> i32 {
+    let run = || -> Result<Vec<Row>> {
+        let mut rows: BTreeMap<String, Row> = BTreeMap::new();
+        for dir in &a.files {
+            let path = dir.join("grades.csv");
+            let text = std::fs::read_to_string(&path)
+                .map_err(|e| Error::InvalidArgument(format!("cannot read {}: {e}", path.display())))?;
+            for row in Row::parse_csv(&text).map_err(|e| Error::InvalidArgument(format!("{}: {e}", path.display())))? {
+                if let Some(old) = rows.get(&row.student) {
+                    if *old != row {
+                        return Err(Error::InvalidArgument(format!(
+                            "{} is in two shards with different marks",
+                            row.student
+                        )));
+                    }
+                }
+                rows.insert(row.student.clone(), row);
+            }
+        }
+        let rows: Vec<Row> = rows.into_values().collect();
+        std::fs::create_dir_all(out)
+            .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", out.display())))?;
+        atomic_write(&out.join("grades.csv"), Row::csv(&rows).as_bytes())?;
+        eprintln!("grades: {} ({} student(s))", out.join("grades.csv").display(), rows.len());
+        Ok(rows)
+    };
+    match run() {
+        Ok(rows) if rows.iter().all(|r| r.status != Status::Failed) => 0,
+        Ok(_) => 1,
+        Err(e) => {
+            eprintln!("siftlab: error: {e}");
+            2
+        }
+    }
+}
