@@ -153,7 +153,7 @@ fn a_whole_class() {
         let alone = run(&mut siftlab(&[file.to_str().unwrap(), "-n", "1", "--seed", "5", "--json"], &ds));
         let j = json_mini::parse(&text(&alone.stdout)).unwrap_or_else(|e| panic!("{id}: {e}: {}", text(&alone.stderr)));
         let total = match j.get("total") {
-            Some(Json::Num(t)) => *t,
+            Some(Json::Num(t)) => t.parse::<f64>().unwrap(),
             _ => panic!("{id}: no total"),
         };
         assert!(row(id).contains(&format!(",{total:.2},")), "{id} alone {total:.2}, in the class {}", row(id));
