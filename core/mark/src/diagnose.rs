@@ -262,9 +262,12 @@ pub fn judge(
                     return result(Status::Correct, None, String::new(), String::new());
                 }
                 let value = got.to_json();
+                // Past the base class's three type checks the reference
+                // marker only compares: a value of another shape inside is
+                // wrong, not an error (it keeps the task's 0.5).
                 if let Some(what) = info_shape_problem(&value) {
                     let d = if matches.is_empty() { Diagnosis::EmptyCase(None) } else { Diagnosis::InfoShape(what) };
-                    return result(Status::Error, Some(d), info.to_string(), shown);
+                    return result(Status::Wrong, Some(d), info.to_string(), shown);
                 }
                 let d = if info_equal(info, &value) {
                     Diagnosis::InfoTypes
@@ -743,7 +746,7 @@ mod tests {
         assert_eq!(judge_v(&pts(&|v| (v as i64).to_string(), true)).1, Some("swapped_xy"));
         assert_eq!(judge_v("[[0, 0], []]"), (Status::Error, Some("wrong_type")));
         assert_eq!(judge_v("null"), (Status::Error, Some("wrong_type")));
-        assert_eq!(judge_v("[[0, 0], [[1]], [1.5]]"), (Status::Error, Some("wrong_shape")));
+        assert_eq!(judge_v("[[0, 0], [[1]], [1.5]]"), (Status::Wrong, Some("wrong_shape")));
         let empty = Case::Info { frame: 1, strategy: Strategy::Dt(0.0), feature: 3 };
         let e0 = reference(&empty, &p.0, &p.1).unwrap();
         assert!(e0.info_matches().is_empty());

@@ -3,8 +3,8 @@
 //! outside the student's interpreter: no method of the student's classes
 //! takes part in the verdict.
 //!
-//! The wire form is JSON: `null`, `true`/`false`, a JSON int (within i64)
-//! or float (finite) are themselves; everything else is an object with one
+//! The wire form is JSON: `null`, `true`/`false`, a JSON int (within i64),
+//! a float (finite) and a string are themselves; everything else is an object with one
 //! tag: `{"int": "DIGITS"}`, `{"float": X | "nan" | "inf" | "-inf"}`,
 //! `{"str": S}`, `{"tuple": [..]}`, `{"list": [..]}`, `{"np": NAME, "value": V}`
 //! (a numpy scalar and its Python value), `{"opaque": TYPE, ...}` (anything
@@ -58,6 +58,7 @@ impl PyValue {
             Json::Int(i) => return PyValue::Int(*i),
             Json::BigInt(s) => return PyValue::BigInt(s.clone()),
             Json::Float(f) if f.is_finite() => return PyValue::Float(*f),
+            Json::Str(s) => return PyValue::Str(s.clone()),
             Json::Obj(kv) if !kv.is_empty() => {
                 let (tag, val) = &kv[0];
                 match (tag.as_str(), val) {
@@ -331,6 +332,9 @@ mod tests {
         assert!(!v(r#"{"tuple": [9, 9], "sub": "Always"}"#).py_eq(&v(r#"{"tuple": [1, 2]}"#)));
         assert!(v(r#"{"np": "float32", "value": 0.10000000149011612}"#).py_eq(&v("0.10000000149011612")));
         assert!(v(r#"{"np": "int64", "value": 523}"#).py_eq(&v("523.0")));
+        // A plain str travels as a JSON string, a subclass tagged.
+        assert_eq!(v(r#""5.0""#), PyValue::Str("5.0".into()));
+        assert!(!v(r#""5.0""#).py_eq(&v("5.0")) && v(r#""a""#).py_eq(&v(r#"{"str": "a", "sub": "S"}"#)));
         // Forged or damaged encodings are opaque: equal to nothing.
         for bad in ["[1, 2]", r#"{"tuple": 3}"#, r#"{"int": "12a"}"#, r#"{"what": 1}"#, "{}"] {
             assert!(matches!(v(bad), PyValue::Opaque(_)), "{bad}");
