@@ -14,6 +14,7 @@ pub mod mark;
 pub mod match_all;
 mod report_files;
 mod sandbox;
+mod submissions;
 pub mod trajectory;
 pub mod visual;
 
@@ -48,7 +49,16 @@ pub fn main() -> i32 {
     }
     // mark's exit status says whether the file got full marks.
     if let Command::Mark(a) = &cli.command {
-        return mark::main(&cli, a);
+        // One file, a class (--out) or the join of shards (--merge).
+        return match (&a.out, a.merge) {
+            (Some(out), true) => class::merge(a, out),
+            (None, true) => {
+                eprintln!("siftlab: error: --merge needs --out DIR, the folder for the joined grades.csv");
+                2
+            }
+            (Some(out), false) => class::run(&cli, a, out),
+            (None, false) => mark::main(&cli, a),
+        };
     }
     match run(&cli) {
         Ok(()) => 0,

@@ -32,20 +32,8 @@ const POLL: Duration = Duration::from_millis(50);
 /// Characters of a crashed harness's stderr kept for the report.
 const STDERR_TAIL: usize = 2000;
 
-/// Runs `mark` and returns the exit status.
+/// Runs `mark` on one file and returns the exit status.
 pub fn main(cli: &Cli, a: &MarkArgs) -> i32 {
-    if a.merge {
-        return match &a.out {
-            Some(out) => crate::class::merge(a, out),
-            None => {
-                eprintln!("siftlab: error: --merge needs --out DIR, the folder for the joined grades.csv");
-                2
-            }
-        };
-    }
-    if let Some(out) = &a.out {
-        return crate::class::run(cli, a, out);
-    }
     match run(cli, a) {
         Ok(m) if m.full() => 0,
         Ok(_) => 1,
@@ -69,7 +57,7 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         return Err(Error::InvalidArgument("--jobs, --resume and --shard go with --out DIR (a class)".into()));
     }
     // A folder (Gradescope's /autograder/submission): its first vision_tasks.py.
-    let file = if arg.is_dir() { crate::class::first_found(arg) } else { Some(arg.clone()) };
+    let file = if arg.is_dir() { crate::submissions::first_found(arg) } else { Some(arg.clone()) };
     let n = a.n as usize;
     let Some(file) = file else {
         let marks = Marks::new(a.seed, n, Vec::new());

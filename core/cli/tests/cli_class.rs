@@ -161,7 +161,7 @@ fn a_whole_class() {
 
     // --resume after kill -9 halfway: the same grades.csv.
     let out = o("resumed");
-    let mut child = siftlab(&[d, "--out", &out, "--jobs", "1", "-n", "1", "--seed", "5"], &ds)
+    let mut child = siftlab(&[d, "--out", &out, "--jobs", "2", "-n", "1", "--seed", "5"], &ds)
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
