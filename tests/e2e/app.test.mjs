@@ -862,6 +862,17 @@ async function pageMarks() {
   const diagnoses = await page.evalAll(tid('mark-failure'), (li) => `${li.dataset.task}:${li.dataset.diagnosis}`);
   return { rows, total, diagnoses };
 }
+// The browser's limit is wall time: WebKit's SIMD128 Pyodide may take over 10 s for an honest
+// dt call (2.25 M DMatch) that the CLI measures as ~2 s of CPU. Only there, a dt time-out is
+// left out of a comparison with the CLI; every other row must be the CLI's.
+function withoutSlowDt(got) {
+  const slowDt = ENGINE === 'webkit' && got.diagnoses.includes('dt:timeout');
+  const keep = (m) => ({
+    rows: m.rows.filter((r) => !(slowDt && r[0] === 'dt')),
+    diagnoses: m.diagnoses.filter((d) => !(slowDt && d.startsWith('dt:'))),
+  });
+  return { slowDt, keep };
+}
 function cliMarks(j) {
   return {
     rows: j.tasks.map((t) => [t.task, t.marks.toFixed(2), String(t.correct), String(t.errors)]),
@@ -902,14 +913,7 @@ test('mark my code: hostile files: no connection, no forged mark, the CLI\'s tab
       await markFile(variant, MARK_N, 1);
       const got = await pageMarks();
       const cli = cliMarks(cliMark(variant, MARK_N, 1));
-      // The browser's limit is wall time: WebKit's SIMD128 Pyodide may take over 10 s for an
-      // honest dt call (2.25 M DMatch), which the CLI measures as ~2 s of CPU. Only there, a dt
-      // time-out is left out of the comparison; every other row must be the CLI's.
-      const slowDt = ENGINE === 'webkit' && got.diagnoses.includes('dt:timeout');
-      const keep = (m) => ({
-        rows: m.rows.filter((r) => !(slowDt && r[0] === 'dt')),
-        diagnoses: m.diagnoses.filter((d) => !(slowDt && d.startsWith('dt:'))),
-      });
+      const { slowDt, keep } = withoutSlowDt(got);
       assert.deepEqual(keep(got).rows, keep(cli).rows, variant);
       if (!slowDt) assert.equal(got.total, cli.total, variant);
       if (variant !== 'hostile/ansi_escapes') assert.deepEqual(keep(got).diagnoses, keep(cli).diagnoses, variant);
@@ -931,10 +935,7 @@ test('mark my code: an endless loop is stopped at 10 s and the page stays usable
   // runs into the 10 s limit, the worker is replaced, and matching_info is marked after it.
   await markFile('loop', 1, 1);
   const got = await pageMarks();
-  // As in the hostile test: on WebKit alone, an honest dt call over 10 s of wall time is left out.
-  const slowDt = ENGINE === 'webkit' && got.diagnoses.includes('dt:timeout');
-  const keep = (m) => ({ rows: m.rows.filter((r) => !(slowDt && r[0] === 'dt')),
-    diagnoses: m.diagnoses.filter((d) => !(slowDt && d.startsWith('dt:'))) });
+  const { keep } = withoutSlowDt(got);
   assert.deepEqual(keep(got), keep(cliMarks(cliMark('loop', 1, 1))));
   assert.ok(got.diagnoses.includes('nndr:timeout'), JSON.stringify(got));
   assert.equal(got.rows.find((r) => r[0] === 'matching_info')[1], '5.00', 'marked after the restart');

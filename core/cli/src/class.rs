@@ -70,7 +70,7 @@ fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
     let frames = frame_ids(&ds)?;
     let cases = plan(a.seed, n, &frames);
     let t0 = Instant::now();
-    let (pairs, dataset) = frame_pairs(&ds, &crate::common::sift_params(cli), &cases)?;
+    let (pairs, dataset) = frame_pairs(&ds, &crate::common::sift_params(cli), &cases, true)?;
     drop(cases);
     let key = RunKey { seed: a.seed, n, dataset, frames };
     let runner = Runner::new(a.no_sandbox)?;

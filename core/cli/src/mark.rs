@@ -87,9 +87,10 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
                 frames.len(),
                 ds.root().display()
             );
-            let mut pairs = Frames { ds, params: sift_params(cli), frames: HashMap::new(), pairs: Vec::new() };
+            // SIFT of each frame the cases use, once, as a class marking does.
+            let (pairs, _) = frame_pairs(&ds, &sift_params(cli), &siftlab_mark::plan(a.seed, n, &frames), false)?;
             let session = Session::new(source, a.seed, n, &frames, Limits::default());
-            runner.mark(session, &mut pairs, 0, true)?
+            runner.mark(session, &pairs, 0, true)?
         }
     };
     let text = format!("{}: {:.2} / 20\n{}", escaped(&name, 200), marks.total, report_text(&marks));
@@ -106,46 +107,36 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
     Ok(marks)
 }
 
-/// The pairs the cases use, SIFT of each frame once, and a fingerprint of
-/// the frames (SHA-256 over their pixels) for `--resume`.
-pub(crate) fn frame_pairs(ds: &Dataset, params: &SiftParams, cases: &[Case]) -> Result<(Vec<Pair>, String)> {
+/// The pairs the cases use, SIFT of each frame once, and (with
+/// `fingerprint`) a SHA-256 over the frames' pixels, for `--resume`.
+pub(crate) fn frame_pairs(
+    ds: &Dataset,
+    params: &SiftParams,
+    cases: &[Case],
+    fingerprint: bool,
+) -> Result<(Vec<Pair>, String)> {
     let ids: std::collections::BTreeSet<u32> = cases.iter().map(Case::frame).collect();
     let mut frames: HashMap<u32, Features> = HashMap::new();
-    let mut fingerprint = Vec::new();
+    let mut digests = Vec::new();
     for &f in &ids {
         for g in [f - 1, f] {
             if let std::collections::hash_map::Entry::Vacant(e) = frames.entry(g) {
                 let img = ds.load_frame(g as usize)?;
-                let mut bytes = format!("{g}:{}x{}:", img.width(), img.height()).into_bytes();
-                bytes.extend_from_slice(img.data());
-                fingerprint.extend_from_slice(sha256_hex(&bytes).as_bytes());
+                if fingerprint {
+                    let mut bytes = format!("{g}:{}x{}:", img.width(), img.height()).into_bytes();
+                    bytes.extend_from_slice(img.data());
+                    digests.extend_from_slice(sha256_hex(&bytes).as_bytes());
+                }
                 e.insert(detect_and_compute(&img, params));
             }
         }
     }
     let pairs = ids.iter().map(|&f| Pair { id: f, prev: frames[&(f - 1)].clone(), cur: frames[&f].clone() }).collect();
-    Ok((pairs, sha256_hex(&fingerprint)))
+    Ok((pairs, if fingerprint { sha256_hex(&digests) } else { String::new() }))
 }
 
-/// The pairs computed so far (each knn request names one the harness was sent).
-trait Known {
-    fn known(&self) -> &[Pair];
-}
-
-/// Pairs computed beforehand, shared by the jobs of a class marking.
+/// The pairs of a plan, computed beforehand (shared by a class's jobs).
 struct Shared<'a>(&'a [Pair]);
-
-impl Known for Shared<'_> {
-    fn known(&self) -> &[Pair] {
-        self.0
-    }
-}
-
-impl Known for Frames {
-    fn known(&self) -> &[Pair] {
-        &self.pairs
-    }
-}
 
 impl Pairs for Shared<'_> {
     fn pair(&mut self, frame: u32) -> Result<&Pair> {
@@ -167,31 +158,6 @@ pub(crate) fn frame_ids(ds: &Dataset) -> Result<Vec<u32>> {
         )));
     }
     Ok((1..count).collect())
-}
-
-/// SIFT of each frame once, and the pairs built from them.
-struct Frames {
-    ds: Dataset,
-    params: SiftParams,
-    frames: HashMap<u32, Features>,
-    pairs: Vec<Pair>,
-}
-
-impl Pairs for Frames {
-    fn pair(&mut self, frame: u32) -> Result<&Pair> {
-        if let Some(i) = self.pairs.iter().position(|p| p.id == frame) {
-            return Ok(&self.pairs[i]);
-        }
-        for f in [frame - 1, frame] {
-            if !self.frames.contains_key(&f) {
-                let img = self.ds.load_frame(f as usize)?;
-                self.frames.insert(f, detect_and_compute(&img, &self.params));
-            }
-        }
-        let (prev, cur) = (self.frames[&(frame - 1)].clone(), self.frames[&frame].clone());
-        self.pairs.push(Pair { id: frame, prev, cur });
-        Ok(self.pairs.last().expect("pushed"))
-    }
 }
 
 /// Starts harness processes: the interpreter found outside, the harness
@@ -249,10 +215,10 @@ impl Runner {
         job: u32,
     ) -> Result<Marks> {
         let session = Session::new(source, seed, n, frames, Limits::default());
-        self.mark(session, &mut Shared(pairs), job, false)
+        self.mark(session, pairs, job, false)
     }
 
-    fn mark<P: Pairs + Known>(&self, mut session: Session, pairs: &mut P, job: u32, verbose: bool) -> Result<Marks> {
+    fn mark(&self, mut session: Session, pairs: &[Pair], job: u32, verbose: bool) -> Result<Marks> {
         if verbose {
             eprintln!(
                 "python: {} (Python {}, {}), {}",
@@ -274,7 +240,7 @@ impl Runner {
                 task = current;
                 task_started = Instant::now();
             }
-            match session.next(pairs)? {
+            match session.next(&mut Shared(pairs))? {
                 Step::Start => {
                     drop(harness.take());
                     harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox, job)?);
@@ -284,11 +250,11 @@ impl Runner {
                     let Some(h) = harness.as_mut() else {
                         return Err(Error::InvalidArgument("no harness is running".into()));
                     };
-                    let outcome = h.request(&line, id, limit, pairs.known(), &mut session.stray_lines);
+                    let outcome = h.request(&line, id, limit, pairs, &mut session.stray_lines);
                     if !matches!(outcome, Outcome::Reply(..)) {
                         drop(harness.take());
                     }
-                    session.outcome(outcome, pairs)?;
+                    session.outcome(outcome, &mut Shared(pairs))?;
                 }
                 Step::Done(marks) => {
                     if let Some(h) = harness.take() {

@@ -184,10 +184,15 @@ impl Python {
                     c.arg("--symlink").arg(target).arg(link);
                 }
             }
+            let mut made: Vec<PathBuf> = Vec::new();
             for (src, dest) in &self.binds {
                 for parent in parents(dest) {
-                    // Folders on the way (e.g. /root, mode 0700 outside) open to the marking uid.
-                    c.args(["--perms", "0755", "--dir"]).arg(parent);
+                    // Folders on the way (e.g. /root, mode 0700 outside) open
+                    // to the marking uid; each made once.
+                    if !made.contains(&parent) {
+                        c.args(["--perms", "0755", "--dir"]).arg(&parent);
+                        made.push(parent);
+                    }
                 }
                 c.arg("--ro-bind").arg(src).arg(dest);
                 for h in self.hidden.iter().filter(|h| h.starts_with(dest) && **h != *dest) {
