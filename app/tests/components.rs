@@ -13,11 +13,12 @@ use leptos::prelude::*;
 use siftlab_app::model::frame::FrameData;
 use siftlab_app::model::lab::{analyse, nearest_keypoint, Lab, Source};
 use siftlab_app::model::urlstate::UrlState;
+use siftlab_app::model::views::Views;
 use siftlab_app::page::{apply_url, url_state, Explorer, DEMO_FEATURE};
-use siftlab_app::protocol::odometry::{StepCounts, VoReply, VoRequest};
+use siftlab_app::protocol::odometry::{StepCounts, Tracker, VoReply, VoRequest};
 use siftlab_app::protocol::sift::{SiftReply, SiftRequest, SiftResult};
 use siftlab_app::protocol::{is_ready, ready_js, Request};
-use siftlab_core::matching::StrategyKind;
+use siftlab_core::matching::{Strategy, StrategyKind};
 use siftlab_core::sift::{Features, KeyPoint};
 use siftlab_core::vo::{Camera, StepDetail};
 use std::sync::Arc;
@@ -137,7 +138,7 @@ fn document() -> web_sys::Document {
 fn mount(lab: Lab) -> web_sys::HtmlElement {
     let div: web_sys::HtmlElement = document().create_element("div").unwrap().unchecked_into();
     document().body().unwrap().append_child(&div).unwrap();
-    let handle = leptos::mount::mount_to(div.clone(), move || view! { <Explorer lab=lab/> });
+    let handle = leptos::mount::mount_to(div.clone(), move || view! { <Explorer views=Views::with_lab(lab)/> });
     handle.forget();
     div
 }
@@ -369,13 +370,13 @@ async fn url_state_round_trips_through_a_fresh_lab() {
     lab.set_threshold("212.5".into());
     lab.set_feature(42);
     lab.lanes.set(16);
-    let st = url_state(lab);
+    let st = url_state(Views::with_lab(lab));
     assert_eq!(st.to_query(), "?src=demo&frame=3&feature=42&algo=dt&t=212.5&lanes=16");
     let fresh = Lab::new();
     // A folder link cannot reopen the folder: it says so, and keeps the settings.
     let mut folder = UrlState::from_query(&st.to_query());
     folder.src = Some("folder".into());
-    apply_url(fresh, &folder);
+    apply_url(Views::with_lab(fresh), &folder);
     assert_eq!(fresh.algo.get_untracked(), StrategyKind::Dt);
     assert_eq!(fresh.threshold(), "212.5");
     assert_eq!(fresh.feature(), Some(42));
@@ -420,12 +421,17 @@ fn worker_messages_round_trip_bit_for_bit() {
 fn odometry_messages_round_trip_and_bad_poses_are_named() {
     // Sequence 03's camera travels with the run.
     let camera = Camera { fx: 721.5377, fy: 721.5377, cx: 609.5593, cy: 172.854 };
-    let v = VoRequest::Start { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into(), camera };
+    let v = VoRequest::Start { id: 5, total: 2, poses: "1 0 0 0 0 1 0 0 0 0 1 0".into(), camera, tracker: Tracker::Lk };
     assert_eq!(Request::from_js(&v.to_js()).unwrap(), Request::Odometry(v.clone()));
-    for threshold in [Some(0.8), None] {
-        let v = VoRequest::MatchedStart { id: 5, total: 2, poses: "p".into(), camera, algo: "nndr".into(), threshold };
-        assert_eq!(Request::from_js(&v.to_js()).unwrap(), Request::Odometry(v));
+    // Each strategy travels typed, an absent threshold as null.
+    for s in [Strategy::Nndr(0.8), Strategy::Nn(None), Strategy::Nn(Some(250.0)), Strategy::Dt(200.0)] {
+        let m = VoRequest::Start { id: 5, total: 2, poses: "p".into(), camera, tracker: Tracker::Matched(s) };
+        assert_eq!(Request::from_js(&m.to_js()).unwrap(), Request::Odometry(m));
     }
+    // A tracker that is not one (an nndr without its ratio) is refused by name.
+    let m = VoRequest::Start { id: 5, total: 2, poses: "p".into(), camera, tracker: Tracker::Lk }.to_js();
+    js_sys::Reflect::set(&m, &"tracker".into(), &"nndr".into()).unwrap();
+    assert_eq!(Request::from_js(&m).unwrap_err(), "voStart: tracker \"nndr\" with threshold None is not a tracker");
     // A camera that cannot be one is refused when the message is read.
     let js = v.to_js();
     let bad = js_sys::Float64Array::from([0.0, 721.5377, 609.5593, 172.854].as_slice());
@@ -491,7 +497,7 @@ fn one_worker_odometry(id: u32, frames: Vec<Vec<u8>>, poses: &str) -> Vec<VoRepl
     let failed = |got: &std::cell::RefCell<Vec<VoReply>>| matches!(got.borrow().last(), Some(VoReply::Failed { .. }));
     let total = frames.len() as u32;
     siftlab_app::worker::odometry::handle(
-        VoRequest::Start { id, total, poses: poses.into(), camera: Camera::default() },
+        VoRequest::Start { id, total, poses: poses.into(), camera: Camera::default(), tracker: Tracker::Lk },
         &post,
     );
     for (i, bytes) in frames.into_iter().enumerate() {
@@ -543,7 +549,14 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     assert!(matches!(one_worker[4], VoReply::Metrics { metrics, .. } if metrics[0] == 4.0));
     assert!(matches!(one_worker[5], VoReply::Done { .. }));
 
-    assert!(handle(VoRequest::Start { id: 7, total: 4, poses: poses.into(), camera: Camera::default() }).is_empty());
+    assert!(handle(VoRequest::Start {
+        id: 7,
+        total: 4,
+        poses: poses.into(),
+        camera: Camera::default(),
+        tracker: Tracker::Lk
+    })
+    .is_empty());
     // Each frame's SIFT as the page's SIFT workers compute it (no gray image),
     // through the postMessage encoding.
     let features: Vec<Features> = frames
@@ -577,7 +590,14 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     assert_eq!(streamed, one_worker);
 
     // A frame out of turn ends the run with a message, and later frames are refused.
-    assert!(handle(VoRequest::Start { id: 8, total: 4, poses: poses.into(), camera: Camera::default() }).is_empty());
+    assert!(handle(VoRequest::Start {
+        id: 8,
+        total: 4,
+        poses: poses.into(),
+        camera: Camera::default(),
+        tracker: Tracker::Lk
+    })
+    .is_empty());
     let got = handle(VoRequest::Frame { id: 8, frame: 2, bytes: frames[2].clone(), points: None });
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("out of order"), "{message}");
@@ -585,20 +605,26 @@ fn streamed_odometry_equals_the_one_worker_loop() {
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("no odometry run"), "{message}");
     // An LK run refuses features without the image.
-    assert!(handle(VoRequest::Start { id: 9, total: 4, poses: poses.into(), camera: Camera::default() }).is_empty());
+    assert!(handle(VoRequest::Start {
+        id: 9,
+        total: 4,
+        poses: poses.into(),
+        camera: Camera::default(),
+        tracker: Tracker::Lk
+    })
+    .is_empty());
     let got = handle(VoRequest::Features { id: 9, frame: 0, features: features[0].clone() });
     let [VoReply::Failed { message, .. }] = got.as_slice() else { panic!("{got:?}") };
     assert!(message.contains("needs the image"), "{message}");
 
     // A matcher-driven run fed the shared features (`VoFeatures`) gives what
     // the same run computing SIFT itself from the images gives.
-    let start = |id| VoRequest::MatchedStart {
+    let start = |id| VoRequest::Start {
         id,
         total: 4,
         poses: poses.into(),
         camera: Camera::default(),
-        algo: "nndr".into(),
-        threshold: Some(0.8),
+        tracker: Tracker::Matched(Strategy::Nndr(0.8)),
     };
     let mut own = Vec::new();
     assert!(handle(start(10)).is_empty());
@@ -633,7 +659,7 @@ fn the_demo_feature_is_large_central_and_matched() {
     assert!(k.size > 30.0, "size {}", k.size);
     assert!((k.x as f64 - w as f64 / 2.0).abs() < w as f64 / 10.0, "x {}", k.x);
     assert!((k.y as f64 - h as f64 / 2.0).abs() < h as f64 / 4.0, "y {}", k.y);
-    let a = analyse(&frame(0), &frame(1), StrategyKind::Nndr, "0.8", &DEMO_FEATURE.to_string()).unwrap();
+    let a = analyse(&frame(0), &frame(1), Strategy::Nndr(0.8), &DEMO_FEATURE.to_string()).unwrap();
     assert_eq!(a.explanation.matches.len(), 1, "{}", a.tuple);
     // What OpenCV's lab code prints for it (the golden draw of the same settings, if drawn).
     if let Some(d) = draws()
@@ -644,13 +670,13 @@ fn the_demo_feature_is_large_central_and_matched() {
     }
     // A link without a feature opens on it; one with a feature keeps its own.
     let lab = Lab::new();
-    apply_url(lab, &UrlState::from_query("?src=folder"));
+    apply_url(Views::with_lab(lab), &UrlState::from_query("?src=folder"));
     assert_eq!(lab.feature(), Some(0));
     let lab = Lab::new();
-    apply_url(lab, &UrlState::from_query("?src=demo&feature=7"));
+    apply_url(Views::with_lab(lab), &UrlState::from_query("?src=demo&feature=7"));
     assert_eq!(lab.feature(), Some(7));
     let lab = Lab::new();
-    apply_url(lab, &UrlState::from_query(""));
+    apply_url(Views::with_lab(lab), &UrlState::from_query(""));
     assert_eq!(lab.feature(), Some(DEMO_FEATURE));
 }
 

@@ -11,6 +11,8 @@
 use leptos::prelude::*;
 use siftlab_app::model::frame::{Frame, FrameData};
 use siftlab_app::model::lab::{analyse, Lab, Source};
+use siftlab_app::model::parse::parse_strategy;
+use siftlab_app::model::views::Views;
 use siftlab_app::page::{current_example, Explorer};
 use siftlab_app::protocol::sift::{SiftReply, SiftRequest};
 use siftlab_app::services::loading::frame_path;
@@ -60,10 +62,12 @@ async fn the_manual_examples_through_the_app() {
         let f = ex.frame as u32;
         let t = siftlab_app::model::lab_manual::threshold_text(ex);
         let kind = siftlab_app::model::lab_manual::example_kind(ex).unwrap();
-        let a = analyse(&frames[&(f - 1)], &frames[&f], kind, &t, &ex.feature.to_string()).unwrap();
+        let a = analyse(&frames[&(f - 1)], &frames[&f], parse_strategy(kind, &t).unwrap(), &ex.feature.to_string())
+            .unwrap();
         assert_eq!(a.tuple, ex.siftlab_value(), "{}", ex.command());
         if let Some(d) = ex.differs {
-            let a = analyse(&frames[&(f - 1)], &frames[&f], kind, &t, &d.feature.to_string()).unwrap();
+            let a = analyse(&frames[&(f - 1)], &frames[&f], parse_strategy(kind, &t).unwrap(), &d.feature.to_string())
+                .unwrap();
             assert_eq!(a.tuple, ex.expected, "{}", ex.command_for(d.feature));
         }
     }
@@ -81,7 +85,7 @@ async fn the_manual_examples_through_the_app() {
     let div: web_sys::HtmlElement =
         web_sys::window().unwrap().document().unwrap().create_element("div").unwrap().unchecked_into();
     web_sys::window().unwrap().document().unwrap().body().unwrap().append_child(&div).unwrap();
-    leptos::mount::mount_to(div.clone(), move || view! { <Explorer lab=lab/> }).forget();
+    leptos::mount::mount_to(div.clone(), move || view! { <Explorer views=Views::with_lab(lab)/> }).forget();
     let text = |id: &str| {
         div.query_selector(&format!("[data-testid={id}]"))
             .unwrap()

@@ -2,7 +2,28 @@
 //! a seed, so the same link gives every student the same questions.
 
 use crate::model::lab::get_info_command;
+use leptos::prelude::*;
 use siftlab_core::matching::StrategyKind;
+
+/// The exercises' state (in the link: `ex`, `q`): the seed (`None`: not
+/// started) and the question number.
+#[derive(Clone, Copy)]
+pub struct ExerciseState {
+    pub seed: RwSignal<Option<u64>>,
+    pub q: RwSignal<u32>,
+}
+
+impl ExerciseState {
+    pub fn new() -> Self {
+        ExerciseState { seed: RwSignal::new(None), q: RwSignal::new(1) }
+    }
+}
+
+impl Default for ExerciseState {
+    fn default() -> Self {
+        Self::new()
+    }
+}
 
 /// SplitMix64: tiny, well distributed, and identical on every platform.
 #[derive(Debug, Clone)]

@@ -137,15 +137,10 @@ pub struct Lab {
     pub attribution: RwSignal<String>,
     /// OpenCV's SIMD width being reproduced: 8 (AVX2) or 16 (AVX-512).
     pub lanes: RwSignal<usize>,
-    /// Exercise seed (None = exercises not started) and question number.
-    pub ex_seed: RwSignal<Option<u64>>,
-    pub ex_q: RwSignal<u32>,
-    /// "Mark my code": the cases' seed and how many per task (in the link).
-    pub mark_seed: RwSignal<u64>,
-    pub mark_n: RwSignal<u32>,
+    /// The strategy and threshold boxes, parsed and validated by the core
+    /// once per change; every view of the pair reads this one.
+    pub strategy: Memo<Result<Strategy, String>>,
     pub analysis: Memo<Option<Result<Analysis, String>>>,
-    /// The "see inside" views' state.
-    pub inside: crate::model::see_inside::Inside,
 }
 
 /// Where a strategy's threshold text sits in [`Lab::thresholds`].
@@ -160,12 +155,13 @@ impl Lab {
         let algo = RwSignal::new(StrategyKind::Nndr);
         let thresholds = RwSignal::new(StrategyKind::ALL.map(default_threshold));
         let feature_text = RwSignal::new("0".to_string());
+        let strategy = Memo::new(move |_| {
+            let algo = algo.get();
+            thresholds.with(|t| parse_strategy(algo, &t[slot(algo)]))
+        });
         let analysis = Memo::new(move |_| {
             let (p, c) = (prev.get()?, cur.get()?);
-            let algo = algo.get();
-            let t = thresholds.with(|t| t[slot(algo)].clone());
-            let feature = feature_text.get();
-            Some(analyse(&p, &c, algo, &t, &feature))
+            Some(strategy.get().and_then(|s| analyse(&p, &c, s, &feature_text.get())))
         });
         Lab {
             prev,
@@ -183,12 +179,8 @@ impl Lab {
             generation: RwSignal::new([0, 0]),
             attribution: RwSignal::new(String::new()),
             lanes: RwSignal::new(8),
-            ex_seed: RwSignal::new(None),
-            ex_q: RwSignal::new(1),
-            mark_seed: RwSignal::new(0),
-            mark_n: RwSignal::new(crate::model::mark::DEFAULT_CASES),
+            strategy,
             analysis,
-            inside: crate::model::see_inside::Inside::new(),
         }
     }
 
@@ -233,18 +225,11 @@ impl Default for Lab {
     }
 }
 
-/// Runs the core on the current settings: validation (`Strategy::parse`, the
-/// feature range), the strategy, `matching_info` and its formatting all live
-/// in the core; this only strings them together.
-pub fn analyse(
-    prev: &Frame,
-    cur: &Frame,
-    algo: StrategyKind,
-    threshold: &str,
-    feature: &str,
-) -> Result<Analysis, String> {
+/// Runs the core on the current settings: validation (the feature range),
+/// the strategy, `matching_info` and its formatting all live in the core;
+/// this only strings them together.
+pub fn analyse(prev: &Frame, cur: &Frame, strategy: Strategy, feature: &str) -> Result<Analysis, String> {
     let t0 = crate::platform::now_ms();
-    let strategy = parse_strategy(algo, threshold)?;
     let feature = parse_feature(feature)?;
     let explanation = explain(&strategy, &prev.features, &cur.features, feature).map_err(|e| e.to_string())?;
     let tuple = explanation.info.to_string();

@@ -1,5 +1,26 @@
-//! "Mark my code" as plain logic: the limits of the view's inputs and the
-//! marking's time limits (the lab's: 10 s a call, 300 s a task).
+//! "Mark my code" as plain logic: the view's state (in the link), the limits
+//! of its inputs and the marking's time limits (the lab's: 10 s a call, 300 s a task).
+
+use leptos::prelude::*;
+
+/// The view's state: the cases' seed and how many per task (`mark`, `mn`).
+#[derive(Clone, Copy)]
+pub struct MarkState {
+    pub seed: RwSignal<u64>,
+    pub n: RwSignal<u32>,
+}
+
+impl MarkState {
+    pub fn new() -> Self {
+        MarkState { seed: RwSignal::new(0), n: RwSignal::new(DEFAULT_CASES) }
+    }
+}
+
+impl Default for MarkState {
+    fn default() -> Self {
+        Self::new()
+    }
+}
 
 /// Cases per task when none are asked for (the lab's automarker: 25).
 pub const DEFAULT_CASES: u32 = siftlab_mark::DEFAULT_CASES as u32;

@@ -17,5 +17,6 @@ pub mod see_inside;
 pub mod selfcheck;
 pub mod sequence;
 pub mod urlstate;
+pub mod views;
 pub mod vo_frame;
 pub mod whole_frame;

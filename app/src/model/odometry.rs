@@ -3,40 +3,58 @@
 //! hover text. The figures themselves are the core's (`render::plot`), the
 //! same the CLI's `--plot` writes.
 
-use crate::model::parse::{parse_threshold, threshold_text};
+use crate::model::parse::{parse_strategy, threshold_text};
+pub use crate::protocol::odometry::Tracker;
 use siftlab_core::matching::{args, Strategy, StrategyKind};
 use siftlab_core::render::plot::axes::nearest_xz;
 use siftlab_core::render::plot::figures::{run_style, Run};
 use siftlab_core::vo::TrajectoryMetrics;
 
-/// The tracker menu's choices: the lab's LK, or one of the strategies.
-pub const TRACKERS: [&str; 4] = ["lk", "dt", "nn", "nndr"];
+/// The tracker menu's choices: the lab's LK (`None`), or one of the strategies.
+pub const TRACKERS: [Option<StrategyKind>; 4] =
+    [None, Some(StrategyKind::Dt), Some(StrategyKind::Nn), Some(StrategyKind::Nndr)];
 
-/// The threshold a strategy starts with in the menu (the README's figures).
-pub fn default_threshold(tracker: &str) -> String {
-    threshold_text(StrategyKind::parse(tracker).and_then(args::odometry_default))
+/// A menu choice's value (`lk`, `dt`, `nn`, `nndr`) and back.
+pub fn tracker_value(kind: Option<StrategyKind>) -> &'static str {
+    kind.map_or("lk", StrategyKind::name)
 }
 
-/// The tracker the controls describe: `None` for LK, else the strategy with
+pub fn tracker_kind(value: &str) -> Option<StrategyKind> {
+    StrategyKind::parse(value)
+}
+
+/// The menu's label of a choice.
+pub fn tracker_label(kind: Option<StrategyKind>) -> String {
+    kind.map_or("Lucas–Kanade (the lab's)".into(), |k| format!("SIFT matching: {}", k.name()))
+}
+
+/// The threshold a strategy starts with in the menu (the README's figures).
+pub fn default_threshold(kind: StrategyKind) -> String {
+    threshold_text(args::odometry_default(kind))
+}
+
+/// The tracker the controls describe, parsed once: LK, or the strategy with
 /// the core's checks and messages (an empty threshold is no threshold).
-pub fn tracker_strategy(tracker: &str, threshold: &str) -> Result<Option<Strategy>, String> {
-    if tracker == "lk" {
-        return Ok(None);
+pub fn tracker_from(kind: Option<StrategyKind>, threshold: &str) -> Result<Tracker, String> {
+    match kind {
+        None => Ok(Tracker::Lk),
+        Some(k) => parse_strategy(k, threshold).map(Tracker::Matched),
     }
-    Strategy::parse(tracker, parse_threshold(threshold)?).map(Some).map_err(|e| e.to_string())
 }
 
 /// The comparison's runs, in the table's order: LK, then each strategy at
 /// its odometry default (dt 200, nn, nndr 0.8).
-pub fn compare_runs() -> [Option<Strategy>; 4] {
-    let with = |kind: StrategyKind| Strategy::parse(kind.name(), args::odometry_default(kind)).ok();
-    [None, with(StrategyKind::Dt), with(StrategyKind::Nn), with(StrategyKind::Nndr)]
+pub fn compare_runs() -> [Tracker; 4] {
+    let with = |kind: StrategyKind| {
+        Strategy::parse(kind.name(), args::odometry_default(kind)).map_or(Tracker::Lk, Tracker::Matched)
+    };
+    [Tracker::Lk, with(StrategyKind::Dt), with(StrategyKind::Nn), with(StrategyKind::Nndr)]
 }
 
 /// A finished run as the page keeps it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RunResult {
-    pub strategy: Option<Strategy>,
+    pub tracker: Tracker,
     pub positions: Vec<[f64; 3]>,
     pub metrics: Option<TrajectoryMetrics>,
     pub ms: f64,
@@ -45,7 +63,7 @@ pub struct RunResult {
 impl RunResult {
     /// The run as the core's figures draw it (name and style by tracker).
     pub fn plot_run(&self) -> Run {
-        let (name, style) = run_style(self.strategy.as_ref());
+        let (name, style) = run_style(self.tracker.strategy());
         Run { name, style, positions: self.positions.clone() }
     }
 }
@@ -124,16 +142,20 @@ mod tests {
 
     #[test]
     fn trackers_and_thresholds() {
-        assert_eq!(tracker_strategy("lk", "junk"), Ok(None));
-        assert_eq!(tracker_strategy("dt", " 200 "), Ok(Some(Strategy::Dt(200.0))));
-        assert_eq!(tracker_strategy("nn", ""), Ok(Some(Strategy::Nn(None))));
-        assert!(tracker_strategy("nndr", "").unwrap_err().contains("nndr needs a threshold"));
-        assert!(tracker_strategy("nndr", "1.5").unwrap_err().contains("outside [0, 1]"));
-        assert_eq!(tracker_strategy("dt", "x").unwrap_err(), "threshold must be a number, got 'x'");
-        assert_eq!(default_threshold("dt"), "200");
-        assert_eq!(default_threshold("nn"), "");
-        assert_eq!(default_threshold("nndr"), "0.8");
-        let names: Vec<String> = compare_runs().iter().map(|s| run_style(s.as_ref()).0).collect();
+        let (dt, nn, nndr) = (Some(StrategyKind::Dt), Some(StrategyKind::Nn), Some(StrategyKind::Nndr));
+        assert_eq!(tracker_from(None, "junk"), Ok(Tracker::Lk));
+        assert_eq!(tracker_from(dt, " 200 "), Ok(Tracker::Matched(Strategy::Dt(200.0))));
+        assert_eq!(tracker_from(nn, ""), Ok(Tracker::Matched(Strategy::Nn(None))));
+        assert!(tracker_from(nndr, "").unwrap_err().contains("nndr needs a threshold"));
+        assert!(tracker_from(nndr, "1.5").unwrap_err().contains("outside [0, 1]"));
+        assert_eq!(tracker_from(dt, "x").unwrap_err(), "threshold must be a number, got 'x'");
+        assert_eq!(StrategyKind::ALL.map(default_threshold), ["200", "", "0.8"]);
+        let values: Vec<&str> = TRACKERS.iter().map(|&k| tracker_value(k)).collect();
+        assert_eq!(values, ["lk", "dt", "nn", "nndr"]);
+        assert!(values.iter().all(|v| tracker_kind(v) == TRACKERS[values.iter().position(|x| x == v).unwrap()]));
+        assert_eq!(tracker_label(None), "Lucas–Kanade (the lab's)");
+        assert_eq!(tracker_label(nndr), "SIFT matching: nndr");
+        let names: Vec<String> = compare_runs().iter().map(|t| run_style(t.strategy()).0).collect();
         assert_eq!(names, ["LK", "dt 200", "nn", "nndr 0.8"]);
     }
 

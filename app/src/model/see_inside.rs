@@ -70,10 +70,9 @@ pub fn rule_text(px: f64) -> String {
 }
 
 /// The counts of the current strategy from the sweep, and its matches
-/// (query, train) with their verdicts: the core's rule parses the threshold.
-pub fn current<'s>(sweep: &'s Sweep, kind: StrategyKind, threshold: &str) -> Result<(Verdicts, Selected<'s>), String> {
-    let t = crate::model::parse::parse_threshold(threshold)?;
-    let s = Strategy::parse(kind.name(), t).map_err(|e| e.to_string())?;
+/// (query, train) with their verdicts.
+pub fn current<'s>(sweep: &'s Sweep, s: &Strategy) -> Result<(Verdicts, Selected<'s>), String> {
+    let kind = s.kind();
     let curve = sweep.curve(kind);
     let (pairs, ok) = match s.threshold() {
         None => curve.all_matches(),

@@ -10,7 +10,7 @@ use super::DescriptorGrid;
 use crate::model::frame::Frame;
 use crate::model::lab::{nearest_keypoint, Lab, Which};
 use crate::model::plot::marker_paint;
-use crate::model::see_inside::{hist_bars, keypoint_place, level_rgba, level_value};
+use crate::model::see_inside::{hist_bars, keypoint_place, level_rgba, level_value, Inside};
 use crate::protocol::inside::{AnatomyData, LevelThumb};
 use crate::services::inside;
 use leptos::prelude::*;
@@ -61,6 +61,7 @@ impl PartialEq for Shown {
 #[component]
 pub fn AnatomyView() -> impl IntoView {
     let lab = expect_context::<Lab>();
+    let inside = expect_context::<Inside>();
     let which = RwSignal::new(Which::Prev);
     let data = RwSignal::new(None::<Shown>);
     let status = RwSignal::new(String::new());
@@ -166,7 +167,7 @@ pub fn AnatomyView() -> impl IntoView {
                 })
                 .collect_view()
         });
-        let sel = lab.inside.kp.get().and_then(|k| f.features.keypoints.get(k).copied()).map(|k| {
+        let sel = inside.kp.get().and_then(|k| f.features.keypoints.get(k).copied()).map(|k| {
             view! { <circle cx=k.x cy=k.y r=(k.size / 2.0).max(3.0) class="kp-sel"/> }
         });
         Some(view! {
@@ -182,7 +183,7 @@ pub fn AnatomyView() -> impl IntoView {
         let r = el.get_bounding_client_rect();
         let x = (ev.client_x() as f64 - r.left()) / r.width() * f.width as f64;
         let y = (ev.client_y() as f64 - r.top()) / r.height() * f.height as f64;
-        lab.inside.kp.set(nearest_keypoint(&f.features.keypoints, x, y));
+        inside.kp.set(nearest_keypoint(&f.features.keypoints, x, y));
     };
 
     view! {
@@ -281,10 +282,10 @@ fn Level(level: LevelThumb, index: usize, enlarged: RwSignal<Option<usize>>, hov
 
 #[component]
 fn KeypointDetail(data: RwSignal<Option<Shown>>) -> impl IntoView {
-    let lab = expect_context::<Lab>();
+    let inside = expect_context::<Inside>();
     move || {
         let Shown(d, f) = data.get()?;
-        let i = lab.inside.kp.get()?;
+        let i = inside.kp.get()?;
         let k = *f.features.keypoints.get(i)?;
         let bins = d.hist.get(i * 72..i * 72 + 72)?;
         let (raw, smooth) = bins.split_at(36);

@@ -10,16 +10,17 @@ use super::mark::MarkMyCode;
 use super::result::ResultPanel;
 use super::see_inside::SeeInside;
 use super::trajectory::TrajectoryView;
-use crate::model::lab::{Lab, Source};
+use crate::model::lab::Source;
 use crate::model::urlstate::UrlState;
+use crate::model::views::Views;
 use crate::services::loading;
 use leptos::prelude::*;
 use siftlab_core::matching::StrategyKind;
 
-/// The whole explorer for a given state (tests mount this with their own `Lab`).
+/// The whole explorer for a given state (tests mount this with their own `Views`).
 #[component]
-pub fn Explorer(lab: Lab) -> impl IntoView {
-    provide_context(lab);
+pub fn Explorer(views: Views) -> impl IntoView {
+    views.provide();
     view! {
         <header class="top">
             <h1>"siftlab"<span class="sub">" — feature matching, step by step"</span></h1>
@@ -71,8 +72,9 @@ fn current_query() -> String {
 /// under nndr 0.8.
 pub const DEMO_FEATURE: usize = 1256;
 
-/// Applies a link's state to a fresh `Lab` and starts loading what it names.
-pub fn apply_url(lab: Lab, st: &UrlState) {
+/// Applies a link's state to fresh `Views` and starts loading what it names.
+pub fn apply_url(views: Views, st: &UrlState) {
+    let Views { lab, exercises, mark, inside } = views;
     if let Some(a) = st.algo {
         lab.algo.set(a);
     }
@@ -90,21 +92,21 @@ pub fn apply_url(lab: Lab, st: &UrlState) {
         lab.lanes.set(l as usize);
     }
     if let Some(v) = st.see.as_deref().and_then(crate::model::see_inside::InsideView::parse) {
-        lab.inside.view.set(Some(v));
+        inside.view.set(Some(v));
     }
     if let Some(px) = &st.px {
-        lab.inside.px.set(px.clone());
+        inside.px.set(px.clone());
     }
-    lab.inside.kp.set(st.kp);
+    inside.kp.set(st.kp);
     if let Some(seed) = st.mark {
-        lab.mark_seed.set(seed);
+        mark.seed.set(seed);
     }
     if let Some(n) = st.mn.filter(|&n| (1..=crate::model::mark::MAX_CASES).contains(&n)) {
-        lab.mark_n.set(n);
+        mark.n.set(n);
     }
     if let Some(seed) = st.ex {
-        lab.ex_seed.set(Some(seed));
-        lab.ex_q.set(st.q.unwrap_or(1).max(1));
+        exercises.seed.set(Some(seed));
+        exercises.q.set(st.q.unwrap_or(1).max(1));
     }
     match st.src.as_deref() {
         Some("folder") => {
@@ -121,7 +123,8 @@ pub fn apply_url(lab: Lab, st: &UrlState) {
 }
 
 /// The URL for the current state (what "share this view" links to).
-pub fn url_state(lab: Lab) -> UrlState {
+pub fn url_state(views: Views) -> UrlState {
+    let Views { lab, exercises, mark, inside } = views;
     let source = lab.source.get();
     let linkable = !matches!(source, Source::Files);
     let algo = lab.algo.get();
@@ -132,14 +135,14 @@ pub fn url_state(lab: Lab) -> UrlState {
         feature: lab.feature(),
         t: if t.trim().is_empty() { None } else { Some(t.trim().to_string()) },
         algo: Some(algo),
-        ex: lab.ex_seed.get(),
-        q: lab.ex_seed.get().map(|_| lab.ex_q.get()),
+        ex: exercises.seed.get(),
+        q: exercises.seed.get().map(|_| exercises.q.get()),
         lanes: Some(lab.lanes.get() as u32).filter(|&l| l != 8),
-        see: lab.inside.view.get().map(|v| v.name().to_string()),
-        px: Some(lab.inside.px.get()).filter(|p| p.trim() != "2"),
-        kp: lab.inside.kp.get(),
-        mark: Some(lab.mark_seed.get()).filter(|&s| s != 0),
-        mn: Some(lab.mark_n.get()).filter(|&n| n != crate::model::mark::DEFAULT_CASES),
+        see: inside.view.get().map(|v| v.name().to_string()),
+        px: Some(inside.px.get()).filter(|p| p.trim() != "2"),
+        kp: inside.kp.get(),
+        mark: Some(mark.seed.get()).filter(|&s| s != 0),
+        mn: Some(mark.n.get()).filter(|&n| n != crate::model::mark::DEFAULT_CASES),
     }
 }
 
@@ -147,10 +150,10 @@ pub fn url_state(lab: Lab) -> UrlState {
 /// the URL kept in step with every change (replaceState: no history spam).
 #[component]
 pub fn App() -> impl IntoView {
-    let lab = Lab::new();
-    apply_url(lab, &UrlState::from_query(&current_query()));
+    let views = Views::new();
+    apply_url(views, &UrlState::from_query(&current_query()));
     Effect::new(move |_| {
-        let q = url_state(lab).to_query();
+        let q = url_state(views).to_query();
         if let Some(w) = web_sys::window() {
             let path = w.location().pathname().unwrap_or_default();
             if q != current_query() {
@@ -160,5 +163,5 @@ pub fn App() -> impl IntoView {
             }
         }
     });
-    view! { <Explorer lab=lab/> }
+    view! { <Explorer views=views/> }
 }

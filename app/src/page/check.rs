@@ -137,13 +137,14 @@ pub fn SelfCheck() -> impl IntoView {
 #[component]
 pub fn Exercises() -> impl IntoView {
     let lab = expect_context::<Lab>();
+    let ex = expect_context::<crate::model::exercise::ExerciseState>();
     let answer = RwSignal::new(String::new());
     let result = RwSignal::new(None::<Result<Diagnosis, String>>);
     // First submission per question counts: (question, correct).
     let marks = RwSignal::new(Vec::<(u32, bool)>::new());
     let current = move || -> Option<Question> {
-        let seed = lab.ex_seed.get()?;
-        lab.source.with(|s| question(seed, lab.ex_q.get(), s.frames()))
+        let seed = ex.seed.get()?;
+        lab.source.with(|s| question(seed, ex.q.get(), s.frames()))
     };
     // Bring the question's frames in when the question changes.
     Effect::new(move |_| {
@@ -159,14 +160,14 @@ pub fn Exercises() -> impl IntoView {
     let count = move || lab.prev.with(|p| p.as_ref().map(|p| p.features.keypoints.len()).unwrap_or(0));
     let start = move |_| {
         let seed = (js_sys::Math::random() * 1e9) as u64 + 1;
-        lab.ex_seed.set(Some(seed));
-        lab.ex_q.set(1);
+        ex.seed.set(Some(seed));
+        ex.q.set(1);
         marks.set(vec![]);
         result.set(None);
         answer.set(String::new());
     };
     let next = move |_| {
-        lab.ex_q.update(|q| *q += 1);
+        ex.q.update(|q| *q += 1);
         result.set(None);
         answer.set(String::new());
     };
@@ -175,7 +176,7 @@ pub fn Exercises() -> impl IntoView {
         let r = parse_strategy(q.algo, &q.threshold)
             .and_then(|s| grade(lab, &s, q.feature(count()), &answer.get_untracked()));
         if let Ok(d) = &r {
-            let qn = lab.ex_q.get_untracked();
+            let qn = ex.q.get_untracked();
             marks.update(|m| {
                 if !m.iter().any(|(n, _)| *n == qn) {
                     m.push((qn, d.correct));
@@ -193,14 +194,14 @@ pub fn Exercises() -> impl IntoView {
     view! {
         <section class="card exercises" aria-label="Exercises">
             <h2>"7 · Exercises"</h2>
-            {move || match lab.ex_seed.get() {
+            {move || match ex.seed.get() {
                 None => view! {
                     <p class="muted">"Random automarker-style questions on the loaded frames. The link in the address bar replays the same questions."</p>
                     <button class="primary" data-testid="exercise-start" on:click=start>"Start exercises"</button>
                 }.into_any(),
                 Some(seed) => view! {
                     <p class="muted">
-                        {move || format!("Exercise {seed} · question {} · ", lab.ex_q.get())}
+                        {move || format!("Exercise {seed} · question {} · ", ex.q.get())}
                         <strong data-testid="score">{score}</strong>
                         " · "<button class="link" on:click=start>"new exercise"</button>
                     </p>

@@ -90,6 +90,7 @@ fn Report(o: Outcome) -> impl IntoView {
 #[component]
 pub fn MarkMyCode() -> impl IntoView {
     let lab = expect_context::<Lab>();
+    let state = expect_context::<crate::model::mark::MarkState>();
     let source = RwSignal::new(String::new());
     let name = RwSignal::new(String::new());
     let running = RwSignal::new(false);
@@ -131,7 +132,7 @@ pub fn MarkMyCode() -> impl IntoView {
     };
     let mark = move |_| {
         let b = bytes.get_value().unwrap_or_else(|| source.get_untracked().into_bytes());
-        let (seed, n) = (lab.mark_seed.get_untracked(), lab.mark_n.get_untracked() as usize);
+        let (seed, n) = (state.seed.get_untracked(), state.n.get_untracked() as usize);
         let src = lab.source.get_untracked();
         running.set(true);
         error.set(None);
@@ -168,20 +169,20 @@ pub fn MarkMyCode() -> impl IntoView {
                 <label class="ctl">
                     <span>"calls per task"</span>
                     <input type="number" min="1" max=MAX_CASES class="num" data-testid="mark-n"
-                        prop:value=move || lab.mark_n.get().to_string()
+                        prop:value=move || state.n.get().to_string()
                         on:change=move |ev| {
                             if let Ok(n) = event_target_value(&ev).trim().parse::<u32>() {
-                                lab.mark_n.set(n.clamp(1, MAX_CASES));
+                                state.n.set(n.clamp(1, MAX_CASES));
                             }
                         }/>
                 </label>
                 <label class="ctl">
                     <span>"seed (in the link)"</span>
                     <input class="num" data-testid="mark-seed"
-                        prop:value=move || lab.mark_seed.get().to_string()
+                        prop:value=move || state.seed.get().to_string()
                         on:change=move |ev| {
                             if let Ok(s) = event_target_value(&ev).trim().parse::<u64>() {
-                                lab.mark_seed.set(s);
+                                state.seed.set(s);
                             }
                         }/>
                 </label>

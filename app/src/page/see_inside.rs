@@ -4,14 +4,12 @@
 
 use super::anatomy::AnatomyView;
 use super::whole_frame::WholeFrameView;
-use crate::model::lab::Lab;
 use crate::model::see_inside::InsideView;
 use leptos::prelude::*;
 
 #[component]
 pub fn SeeInside() -> impl IntoView {
-    let lab = expect_context::<Lab>();
-    let view_sig = lab.inside.view;
+    let view_sig = expect_context::<crate::model::see_inside::Inside>().view;
     let tab = move |v: InsideView, label: &'static str| {
         view! {
             <button

@@ -12,7 +12,9 @@ use super::vo_frame::{FrameStep, VoFrameView};
 use super::vo_plot::VoFigures;
 use crate::model::frameset::{run_from_zero, vo_frame_count, vo_range_label};
 use crate::model::lab::Lab;
-use crate::model::odometry::{default_threshold, tracker_strategy, RunResult, TRACKERS};
+use crate::model::odometry::{
+    default_threshold, tracker_from, tracker_kind, tracker_label, tracker_value, RunResult, Tracker, TRACKERS,
+};
 use crate::model::plot::{percent, vo_done_text, vo_progress_text};
 use crate::platform::{blob_url, revoke};
 use crate::protocol::odometry::VoReply;
@@ -61,10 +63,12 @@ pub fn TrajectoryView() -> impl IntoView {
     let error = RwSignal::new(None::<String>);
     let done = RwSignal::new(None::<Done>);
     let frame_steps = RwSignal::new(Vec::<FrameStep>::new());
-    // The tracker: "lk" (the lab's) or a strategy with its threshold.
-    let tracker = RwSignal::new("lk".to_string());
+    // The tracker menu (`None`: the lab's LK) and the strategy's threshold,
+    // parsed into a tracker once per change; the run keeps the one it ran.
+    let tracker = RwSignal::new(None::<siftlab_core::matching::StrategyKind>);
     let threshold = RwSignal::new(String::new());
-    let strategy_run = RwSignal::new(None::<siftlab_core::matching::Strategy>);
+    let chosen = Memo::new(move |_| tracker_from(tracker.get(), &threshold.get()));
+    let tracker_run = RwSignal::new(Tracker::Lk);
     let metrics = RwSignal::new(None::<TrajectoryMetrics>);
     let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
     // The run's ground-truth poses (the poses file's text), for the KITTI note.
@@ -73,7 +77,17 @@ pub fn TrajectoryView() -> impl IntoView {
     let started_ms = StoredValue::new(0.0f64);
     // Frames 0, 1, 2, … with no gap: the demo's 119, 120, 149, 150 are not part of it.
     let available = move || lab.source.with(|s| run_from_zero(s.frames()));
-    Effect::new(move |_| frame_text.set(available().saturating_sub(1).to_string()));
+    // The default FRAME_ID follows the frames available (the demo's list
+    // arrives after the page draws) unless the user has typed one of their own.
+    let last_default = StoredValue::new(String::new());
+    Effect::new(move |_| {
+        let default = available().saturating_sub(1).to_string();
+        let typed = frame_text.with_untracked(|t| !t.is_empty() && *t != last_default.get_value());
+        last_default.set_value(default.clone());
+        if !typed {
+            frame_text.set(default);
+        }
+    });
 
     let run = move |_: ()| {
         let n = match vo_frame_count(&frame_text.get_untracked(), available()) {
@@ -83,14 +97,14 @@ pub fn TrajectoryView() -> impl IntoView {
                 return;
             }
         };
-        let strategy = match tracker_strategy(&tracker.get_untracked(), &threshold.get_untracked()) {
-            Ok(s) => s,
+        let chosen = match chosen.get_untracked() {
+            Ok(t) => t,
             Err(e) => {
                 error.set(Some(e));
                 return;
             }
         };
-        strategy_run.set(strategy);
+        tracker_run.set(chosen);
         metrics.set(None);
         error.set(None);
         if let Some(d) = done.get_untracked() {
@@ -130,7 +144,7 @@ pub fn TrajectoryView() -> impl IntoView {
                     running.set(false);
                 }
             };
-            if let Err(e) = odometry::start(inputs, &[strategy], move |_, m| on_event(m)) {
+            if let Err(e) = odometry::start(inputs, &[chosen], move |_, m| on_event(m)) {
                 error.set(Some(e));
                 running.set(false);
             }
@@ -144,7 +158,7 @@ pub fn TrajectoryView() -> impl IntoView {
     let truth = Signal::derive(move || steps.with(|s| s.iter().filter_map(|(_, _, t)| *t).collect::<Vec<_>>()));
     let runs = Signal::derive(move || {
         let positions = steps.with(|s| s.iter().map(|(_, e, _)| *e).collect());
-        vec![RunResult { strategy: strategy_run.get(), positions, metrics: None, ms: 0.0 }.plot_run()]
+        vec![RunResult { tracker: tracker_run.get(), positions, metrics: None, ms: 0.0 }.plot_run()]
     });
     let last = move || steps.with(|s| s.last().map(|(_, e, _)| *e).unwrap_or([0.0; 3]));
     let count = Signal::derive(move || vo_frame_count(&frame_text.get(), available()));
@@ -174,14 +188,16 @@ pub fn TrajectoryView() -> impl IntoView {
                 <label class="ctl">
                     <span>"tracker"</span>
                     <select data-testid="vo-tracker" on:change=move |ev| {
-                        let v = event_target_value(&ev);
-                        threshold.set(default_threshold(&v).to_string());
-                        tracker.set(v);
+                        let k = tracker_kind(&event_target_value(&ev));
+                        threshold.set(k.map(default_threshold).unwrap_or_default());
+                        tracker.set(k);
                     }>
-                        {TRACKERS.map(|t| view! { <option value=t selected=move || tracker.get() == t>{if t == "lk" { "Lucas–Kanade (the lab's)".to_string() } else { format!("SIFT matching: {t}") }}</option> })}
+                        {TRACKERS.map(|k| view! {
+                            <option value=tracker_value(k) selected=move || tracker.get() == k>{tracker_label(k)}</option>
+                        })}
                     </select>
                 </label>
-                <Show when=move || tracker.get() != "lk">
+                <Show when=move || tracker.get().is_some()>
                     <label class="ctl">
                         <span>"threshold"</span>
                         <input class="num" data-testid="vo-threshold" prop:value=move || threshold.get()
@@ -203,7 +219,7 @@ pub fn TrajectoryView() -> impl IntoView {
                     prop:disabled=move || running.get() || available() < MANUAL_FRAME_ID + 1
                     on:click=move |_| {
                         frame_text.set(MANUAL_FRAME_ID.to_string());
-                        tracker.set("lk".into());
+                        tracker.set(None);
                         run(());
                     }
                 >
@@ -228,7 +244,7 @@ pub fn TrajectoryView() -> impl IntoView {
                         <VoFigures truth=truth runs=runs name="vo"/>
                         <p class="mono small" data-testid="vo-coordinates">{move || coordinates_text(&last())}</p>
                     </div>
-                    <VoFrameView frames=frames steps=frame_steps lk=Signal::derive(move || strategy_run.get().is_none())/>
+                    <VoFrameView frames=frames steps=frame_steps lk=Signal::derive(move || tracker_run.get() == Tracker::Lk)/>
                 </div>
             </Show>
             {move || done.get().map(|d| view! {

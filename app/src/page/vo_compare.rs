@@ -36,7 +36,7 @@ fn start(ctx: Ctx) {
     let runs = compare_runs();
     let n = runs.len();
     ctx.results.set(
-        runs.iter().map(|&strategy| RunResult { strategy, positions: Vec::new(), metrics: None, ms: 0.0 }).collect(),
+        runs.iter().map(|&tracker| RunResult { tracker, positions: Vec::new(), metrics: None, ms: 0.0 }).collect(),
     );
     ctx.status.set(format!("running the {n} trackers side by side"));
     ctx.poses_urls.update(|u| {
@@ -77,7 +77,7 @@ fn start(ctx: Ctx) {
                 true
             }
             VoReply::Failed { message, .. } => {
-                let e = format!("{}: {message}", run_style(runs[k].as_ref()).0);
+                let e = format!("{}: {message}", run_style(runs[k].strategy()).0);
                 ctx.error.update(|old| *old = Some(old.take().map_or(e.clone(), |o| format!("{o}; {e}"))));
                 true
             }

@@ -18,7 +18,7 @@ use crate::model::lab::Lab;
 use crate::model::plot::marker_paint;
 use crate::model::see_inside::{
     chart_points, chart_x, chart_xmax, chart_xy, chart_y, counts_text, crossings_text, current, marker_points,
-    parse_px, rule_text,
+    parse_px, rule_text, Inside,
 };
 use crate::model::whole_frame::{clip_line, ends, filter_pairs, nearest_match, step_pick, Filter, Layout};
 use crate::protocol::inside::SweepData;
@@ -112,6 +112,7 @@ struct Pick {
 #[component]
 pub fn WholeFrameView() -> impl IntoView {
     let lab = expect_context::<Lab>();
+    let inside = expect_context::<Inside>();
     let swept = RwSignal::new(None::<Swept>);
     let status = RwSignal::new(String::new());
     let error = RwSignal::new(None::<String>);
@@ -126,7 +127,7 @@ pub fn WholeFrameView() -> impl IntoView {
     // Once per pair (and per epipolar threshold): the sweep in the worker.
     Effect::new(move |_| {
         let (Some(p), Some(c)) = (lab.prev.get(), lab.cur.get()) else { return };
-        let px = match parse_px(&lab.inside.px.get()) {
+        let px = match parse_px(&inside.px.get()) {
             Ok(px) => px,
             Err(e) => return error.set(Some(e)),
         };
@@ -176,14 +177,12 @@ pub fn WholeFrameView() -> impl IntoView {
 
     let selection = Memo::new(move |_| {
         let s = swept.get()?;
-        let (kind, t) = (lab.algo.get(), lab.threshold());
-        Some(current(&s.0.sweep, kind, &t).map(|(v, _)| v))
+        Some(lab.strategy.get().and_then(|st| current(&s.0.sweep, &st).map(|(v, _)| v)))
     });
     // The matches shown: the strategy's at the threshold, through the filter.
     let shown = Memo::new(move |_| {
-        let s = swept.get()?;
-        let (kind, t) = (lab.algo.get(), lab.threshold());
-        let (_, (pairs, ok)) = current(&s.0.sweep, kind, &t).ok()?;
+        let (s, st) = (swept.get()?, lab.strategy.get().ok()?);
+        let (_, (pairs, ok)) = current(&s.0.sweep, &st).ok()?;
         Some(Arc::new(filter_pairs(pairs, ok, filter.get())))
     });
     Effect::new(move |_| {
@@ -286,11 +285,9 @@ pub fn WholeFrameView() -> impl IntoView {
         let s = swept.get()?;
         let Swept(_, p, c) = &s;
         let (a, b) = (p.features.keypoints[pk.query as usize], c.features.keypoints[pk.train as usize]);
-        let px = parse_px(&lab.inside.px.get()).unwrap_or(2.0);
+        let px = parse_px(&inside.px.get()).unwrap_or(2.0);
         let fid = lab.frame_id.get();
-        let strategy =
-            Strategy::parse(lab.algo.get().name(), crate::model::parse::parse_threshold(&lab.threshold()).ok()?)
-                .ok()?;
+        let strategy = lab.strategy.get().ok()?;
         let ex = explain(&strategy, &p.features, &c.features, pk.query as usize).ok()?;
         let nearest = |i: usize| {
             ex.ranked.get(i).map(|m| format!("d{} = {} (keypoint {})", i + 1, py_f32(m.distance), m.train_idx))
@@ -365,15 +362,15 @@ pub fn WholeFrameView() -> impl IntoView {
 
     view! {
         <div class="whole-frame" data-testid="whole-frame">
-            <p class="muted">{move || rule_text(parse_px(&lab.inside.px.get()).unwrap_or(2.0))}</p>
+            <p class="muted">{move || rule_text(parse_px(&inside.px.get()).unwrap_or(2.0))}</p>
             <div class="row wrap">
                 <label>
                     "Correct within "
                     <input
                         class="px"
                         data-testid="epipolar-px"
-                        prop:value=move || lab.inside.px.get()
-                        on:change=move |ev| lab.inside.px.set(event_target_value(&ev))
+                        prop:value=move || inside.px.get()
+                        on:change=move |ev| inside.px.set(event_target_value(&ev))
                     />
                     " px"
                 </label>
@@ -455,7 +452,7 @@ fn TradeoffChart(swept: RwSignal<Option<Swept>>) -> impl IntoView {
                 }
             })
             .collect_view();
-        let marker = current(sweep, lab.algo.get(), &lab.threshold()).ok().and_then(|(v, _)| {
+        let marker = lab.strategy.get().and_then(|st| current(sweep, &st)).ok().and_then(|(v, _)| {
             let p = v.precision()?;
             Some(view! { <circle cx=chart_x(v.matches, xmax, w) cy=chart_y(p, h) r="6" class="chart-now"/> })
         });

@@ -4,20 +4,61 @@
 
 use super::codec::*;
 use js_sys::{Object, Uint8Array};
+use siftlab_core::matching::Strategy;
 use siftlab_core::sift::Features;
 use siftlab_core::vo::{Camera, StepDetail};
 use wasm_bindgen::{JsCast, JsValue};
 
+/// What drives an odometry run: the lab's Lucas–Kanade loop, or the loop
+/// driven by the student's matcher (`vo::matched`) with a validated strategy.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Tracker {
+    Lk,
+    Matched(Strategy),
+}
+
+impl Tracker {
+    /// The strategy of a matched run (`None`: LK), as the core's figures take it.
+    pub fn strategy(&self) -> Option<&Strategy> {
+        match self {
+            Tracker::Lk => None,
+            Tracker::Matched(s) => Some(s),
+        }
+    }
+
+    /// The menu's and the message's name: `lk`, `dt`, `nn` or `nndr`.
+    pub fn name(&self) -> &'static str {
+        self.strategy().map_or("lk", Strategy::name)
+    }
+}
+
+/// The tracker in a message: its name and the strategy's threshold (a number
+/// or null). Decoding builds the variant directly: the page sends only
+/// strategies the core has already validated.
+fn set_tracker(o: &Object, t: &Tracker) {
+    set(o, "tracker", &t.name().into());
+    set(o, "threshold", &t.strategy().and_then(Strategy::threshold).map_or(JsValue::NULL, JsValue::from));
+}
+
+fn get_tracker(v: &JsValue) -> Result<Tracker, String> {
+    let t = get(v, "threshold")?.as_f64();
+    let name = get_str(v, "tracker")?;
+    Ok(match (name.as_str(), t) {
+        ("lk", _) => Tracker::Lk,
+        ("dt", Some(t)) => Tracker::Matched(Strategy::Dt(t)),
+        ("nn", t) => Tracker::Matched(Strategy::Nn(t)),
+        ("nndr", Some(t)) => Tracker::Matched(Strategy::Nndr(t)),
+        _ => return Err(format!("voStart: tracker {name:?} with threshold {t:?} is not a tracker")),
+    })
+}
+
 /// Page → tracking worker.
 #[derive(Debug, Clone, PartialEq)]
 pub enum VoRequest {
-    /// Starts the lab's loop (Lucas–Kanade) over `total` frames, fed one
-    /// [`VoRequest::Frame`] at a time.
-    Start { id: u32, total: u32, poses: String, camera: Camera },
-    /// Starts the loop driven by the student's matcher (`vo::matched`)
-    /// instead of LK; its frames come as [`VoRequest::Features`] (or as
-    /// `Frame`s, on which the worker runs SIFT itself).
-    MatchedStart { id: u32, total: u32, poses: String, camera: Camera, algo: String, threshold: Option<f64> },
+    /// Starts a run over `total` frames: LK fed one [`VoRequest::Frame`] at a
+    /// time, or the matched loop fed [`VoRequest::Features`] (or `Frame`s, on
+    /// which the worker runs SIFT itself).
+    Start { id: u32, total: u32, poses: String, camera: Camera, tracker: Tracker },
     /// The run's next frame, with its keypoints if the page's SIFT workers
     /// computed them (`None`: the tracker detects itself where the loop
     /// re-detects; frame 1 never does).
@@ -105,21 +146,13 @@ impl VoRequest {
     pub fn to_js(&self) -> JsValue {
         let o = Object::new();
         match self {
-            VoRequest::Start { id, total, poses, camera } => {
+            VoRequest::Start { id, total, poses, camera, tracker } => {
                 set(&o, "type", &"voStart".into());
                 set(&o, "id", &(*id).into());
                 set(&o, "total", &(*total).into());
                 set(&o, "poses", &poses.as_str().into());
                 set_camera(&o, "camera", camera);
-            }
-            VoRequest::MatchedStart { id, total, poses, camera, algo, threshold } => {
-                set(&o, "type", &"voMatchedStart".into());
-                set(&o, "id", &(*id).into());
-                set(&o, "total", &(*total).into());
-                set(&o, "poses", &poses.as_str().into());
-                set_camera(&o, "camera", camera);
-                set(&o, "algo", &algo.as_str().into());
-                set(&o, "threshold", &threshold.map_or(JsValue::NULL, JsValue::from));
+                set_tracker(&o, tracker);
             }
             VoRequest::Frame { id, frame, bytes, points } => {
                 set(&o, "type", &"voFrame".into());
@@ -148,14 +181,7 @@ impl VoRequest {
                     total: get_u32(v, "total")?,
                     poses: get_str(v, "poses")?,
                     camera: get_camera(v, "camera")?,
-                },
-                "voMatchedStart" => VoRequest::MatchedStart {
-                    id,
-                    total: get_u32(v, "total")?,
-                    poses: get_str(v, "poses")?,
-                    camera: get_camera(v, "camera")?,
-                    algo: get_str(v, "algo")?,
-                    threshold: get(v, "threshold")?.as_f64(),
+                    tracker: get_tracker(v)?,
                 },
                 "voFrame" => VoRequest::Frame {
                     id,
@@ -167,7 +193,7 @@ impl VoRequest {
             })
         };
         let k = kind(v).ok()?;
-        matches!(k.as_str(), "voStart" | "voMatchedStart" | "voFrame" | "voFeatures").then(|| parse(&k))
+        matches!(k.as_str(), "voStart" | "voFrame" | "voFeatures").then(|| parse(&k))
     }
 }
 

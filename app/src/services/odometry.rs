@@ -8,12 +8,11 @@
 //! one-worker loop (and the CLI) computes, whatever the number of workers.
 //! Dropping the run ([`stop`], or a new [`start`]) terminates its trackers.
 
-use crate::protocol::odometry::{VoReply, VoRequest};
+use crate::protocol::odometry::{Tracker, VoReply, VoRequest};
 use crate::protocol::Request;
 use crate::services::loading::VoInputs;
 use crate::services::sift_pool;
 use crate::services::worker_handle::WorkerHandle;
-use siftlab_core::matching::Strategy;
 use siftlab_core::sift::Features;
 use std::cell::{Cell, RefCell};
 use std::rc::Rc;
@@ -34,10 +33,10 @@ enum Slot {
     Gone,
 }
 
-struct Tracker {
+/// One tracking worker of the run and where it is.
+struct Running {
     handle: WorkerHandle,
-    /// `None`: the lab's LK loop.
-    strategy: Option<Strategy>,
+    tracker: Tracker,
     /// The next frame to send.
     next: usize,
     busy: bool,
@@ -51,7 +50,7 @@ struct Run {
     /// Frames asked of the SIFT workers so far, and how many are pending.
     requested: usize,
     pending: usize,
-    trackers: Vec<Tracker>,
+    trackers: Vec<Running>,
     on_event: Rc<dyn Fn(usize, VoReply)>,
 }
 
@@ -73,13 +72,13 @@ fn lookahead() -> usize {
     4 * sift_pool::worker_count()
 }
 
-/// Starts `trackers` (`None`: LK; else the strategy's matched loop) side by
+/// Starts `trackers` (the lab's LK loop or a strategy's matched loop) side by
 /// side on `inputs` (frames, ground truth and camera); `on_event(k, m)` gets
 /// tracker k's `VoStep`s, `VoMetrics` and `VoDone`, or its `Failed`. A new
 /// run replaces the previous one.
 pub fn start(
     inputs: VoInputs,
-    trackers: &[Option<Strategy>],
+    trackers: &[Tracker],
     on_event: impl Fn(usize, VoReply) + 'static,
 ) -> Result<(), String> {
     stop();
@@ -91,25 +90,15 @@ pub fn start(
     let script = sift_pool::worker_script();
     let total = frames.len() as u32;
     let mut started = Vec::with_capacity(trackers.len());
-    for (k, strategy) in trackers.iter().enumerate() {
+    for (k, &tracker) in trackers.iter().enumerate() {
         let handle = WorkerHandle::start(
             &script,
             VoReply::from_js,
             move |m| on_tracker_message(generation, k, m),
             move || on_tracker_crash(generation, k),
         )?;
-        handle.send(&Request::Odometry(match strategy {
-            None => VoRequest::Start { id: VO_ID, total, poses: poses.clone(), camera },
-            Some(s) => VoRequest::MatchedStart {
-                id: VO_ID,
-                total,
-                poses: poses.clone(),
-                camera,
-                algo: s.name().into(),
-                threshold: s.threshold(),
-            },
-        }));
-        started.push(Tracker { handle, strategy: *strategy, next: 0, busy: false, over: false });
+        handle.send(&Request::Odometry(VoRequest::Start { id: VO_ID, total, poses: poses.clone(), camera, tracker }));
+        started.push(Running { handle, tracker, next: 0, busy: false, over: false });
     }
     let slots = frames.iter().map(|_| Slot::Pending).collect();
     let run =
@@ -142,13 +131,13 @@ fn feed(generation: u32) {
                 continue;
             }
             // The LK loop never re-detects on frame 1: it needs no keypoints there.
-            let lk_frame_one = t.strategy.is_none() && i == 1;
-            let msg = match (&run.slots[i], &t.strategy) {
+            let lk_frame_one = t.tracker == Tracker::Lk && i == 1;
+            let msg = match (&run.slots[i], &t.tracker) {
                 (Slot::Pending, _) if !lk_frame_one => continue,
-                (Slot::Ready(f), Some(_)) => {
+                (Slot::Ready(f), Tracker::Matched(_)) => {
                     VoRequest::Features { id: VO_ID, frame: i as u32, features: (**f).clone() }
                 }
-                (Slot::Ready(f), None) if !lk_frame_one => VoRequest::Frame {
+                (Slot::Ready(f), Tracker::Lk) if !lk_frame_one => VoRequest::Frame {
                     id: VO_ID,
                     frame: i as u32,
                     bytes: run.frames[i].clone(),

@@ -2,7 +2,7 @@
 //! driven by a strategy's matches), one frame per request, in frame order.
 
 use crate::platform::now_ms;
-use crate::protocol::odometry::{StepCounts, VoReply, VoRequest};
+use crate::protocol::odometry::{StepCounts, Tracker, VoReply, VoRequest};
 use siftlab_core::vo::Camera;
 use siftlab_core::GrayImage;
 
@@ -10,19 +10,11 @@ use siftlab_core::GrayImage;
 /// metrics and its end, or why it failed (which ends the run).
 pub fn handle(req: VoRequest, post: &dyn Fn(VoReply)) {
     match req {
-        VoRequest::Start { id, total, poses, camera } => {
-            let started = VoSession::start(id, total as usize, &poses, camera);
-            let failed = started.as_ref().err().cloned();
-            SESSION.with(|s| *s.borrow_mut() = started.ok());
-            if let Some(message) = failed {
-                post(VoReply::Failed { id, message });
-            }
-        }
-        VoRequest::MatchedStart { id, total, poses, camera, algo, threshold } => {
-            let started = siftlab_core::matching::Strategy::parse(&algo, threshold)
-                .map_err(|e| e.to_string())
-                .and_then(|s| VoSession::start(id, total as usize, &poses, camera).map(|v| v.with_matcher(s)))
-                .and_then(|r| r);
+        VoRequest::Start { id, total, poses, camera, tracker } => {
+            let started = VoSession::start(id, total as usize, &poses, camera).and_then(|v| match tracker {
+                Tracker::Lk => Ok(v),
+                Tracker::Matched(s) => v.with_matcher(s),
+            });
             let failed = started.as_ref().err().cloned();
             SESSION.with(|s| *s.borrow_mut() = started.ok());
             if let Some(message) = failed {
