@@ -1,7 +1,8 @@
-//! The page's state and plain logic, no DOM: the lab's settings and analysis
-//! ([`lab`]), parsing, the URL, frame sets, exercises and self-checks, the
-//! manual's examples, Python literals, the KITTI sequence and its camera, the odometry views' logic and the
-//! figures' geometry.
+//! The page's state and plain logic, no DOM: the state of each view
+//! ([`views`]: the explorer's [`lab`], the exercises, marking, see-inside),
+//! parsing, the URL, frame sets, self-checks, the manual's examples, Python
+//! literals, the KITTI sequence and its camera, the odometry views' logic
+//! ([`odometry`]) and the figures' geometry.
 
 pub mod exercise;
 pub mod frame;
@@ -18,5 +19,4 @@ pub mod selfcheck;
 pub mod sequence;
 pub mod urlstate;
 pub mod views;
-pub mod vo_frame;
 pub mod whole_frame;

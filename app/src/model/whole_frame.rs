@@ -1,8 +1,76 @@
 //! The whole-frame view's plain logic: its two layouts, the correct / wrong
 //! filter, which match a click picks, stepping through matches with keys,
-//! and the picked match's epipolar line clipped to the current frame.
+//! the picked match (its descriptor distance, its Sampson distance to the
+//! true geometry and its epipolar line) and that line clipped to the frame.
 
-use siftlab_core::sift::KeyPoint;
+use nalgebra::Matrix3;
+use siftlab_core::dataset::PoseRow;
+use siftlab_core::matching::epipolar::{epipolar_line, fundamental, sampson};
+use siftlab_core::matching::{explain, Strategy};
+use siftlab_core::sift::{Features, KeyPoint};
+use siftlab_core::vo::Camera;
+
+/// The pair's true fundamental matrix from its ground-truth poses (none
+/// without poses, or for poses that give no geometry).
+pub fn true_fundamental(poses: Option<&[PoseRow; 2]>, camera: &Camera) -> Option<Matrix3<f64>> {
+    poses.and_then(|ab| fundamental(&ab[0], &ab[1], camera).ok())
+}
+
+/// Everything the picked match's panel says.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pick {
+    /// Its place among the matches shown, and how many are shown.
+    pub index: usize,
+    pub of: usize,
+    pub query: u32,
+    pub train: u32,
+    /// The descriptor distance (the brute-force matcher's, as OpenCV gives it).
+    pub distance: Option<f32>,
+    /// Against the true geometry `F`, when the pair has poses.
+    pub sampson: Option<f64>,
+    pub line: Option<[f64; 3]>,
+}
+
+/// The match (query, train) among the `shown` pairs, with its distance and,
+/// given `F`, its Sampson distance and epipolar line in the current frame.
+pub fn pick_of(
+    shown: &[[u32; 2]],
+    picked: [u32; 2],
+    prev: &Features,
+    cur: &Features,
+    f: Option<&Matrix3<f64>>,
+) -> Option<Pick> {
+    let [q, t] = picked;
+    let index = shown.iter().position(|&p| p == picked)?;
+    let (a, b) = (prev.keypoints.get(q as usize)?, cur.keypoints.get(t as usize)?);
+    // Every train descriptor ranked by distance: the nn row has them all.
+    let row = explain(&Strategy::Nn(None), prev, cur, q as usize).ok();
+    let distance = row.and_then(|e| e.ranked.iter().find(|r| r.train_idx == t as usize).map(|r| r.distance));
+    Some(Pick {
+        index,
+        of: shown.len(),
+        query: q,
+        train: t,
+        distance,
+        sampson: f.map(|f| sampson(f, [a.x, a.y], [b.x, b.y])),
+        line: f.map(|f| epipolar_line(f, [a.x, a.y])),
+    })
+}
+
+/// The picked match's verdict: its Sampson distance against the threshold.
+pub fn verdict_text(sampson: Option<f64>, px: f64) -> String {
+    match sampson {
+        Some(d) => {
+            let ok = d <= px;
+            format!(
+                "Sampson distance to the true epipolar geometry {d:.3} px {} {px} px: {}",
+                if ok { "≤" } else { ">" },
+                if ok { "correct" } else { "wrong" }
+            )
+        }
+        None => "no ground-truth poses: not judged".into(),
+    }
+}
 
 /// How the matches are drawn.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -142,6 +210,19 @@ mod tests {
 
     fn kp(x: f32, y: f32) -> KeyPoint {
         KeyPoint { x, y, size: 2.0, angle: 0.0, response: 0.0, octave: 0 }
+    }
+
+    #[test]
+    fn the_verdict_says_which_side_of_the_threshold() {
+        assert_eq!(
+            verdict_text(Some(1.25), 2.0),
+            "Sampson distance to the true epipolar geometry 1.250 px ≤ 2 px: correct"
+        );
+        assert_eq!(
+            verdict_text(Some(2.5), 2.0),
+            "Sampson distance to the true epipolar geometry 2.500 px > 2 px: wrong"
+        );
+        assert_eq!(verdict_text(None, 2.0), "no ground-truth poses: not judged");
     }
 
     #[test]

@@ -1,15 +1,10 @@
 //! The whole page: the explorer in the lab's order, and the link that
 //! restores a view (the URL state read into the lab and written back).
 
-use super::check::{Exercises, SelfCheck};
-use super::controls::Controls;
-use super::explain::Explanation;
-use super::frames::FramesView;
-use super::load::{Loader, Status};
 use super::mark::MarkMyCode;
-use super::result::ResultPanel;
+use super::matching::{Controls, Exercises, Explanation, FramesView, Loader, ResultPanel, SelfCheck, Status};
+use super::odometry::OdometryView;
 use super::see_inside::SeeInside;
-use super::trajectory::TrajectoryView;
 use crate::model::lab::Source;
 use crate::model::urlstate::UrlState;
 use crate::model::views::Views;
@@ -44,7 +39,7 @@ pub fn Explorer(views: Views) -> impl IntoView {
                 </div>
             </div>
             <SeeInside/>
-            <TrajectoryView/>
+            <OdometryView/>
             <MarkMyCode/>
         </main>
         <footer>

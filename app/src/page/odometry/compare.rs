@@ -2,7 +2,7 @@
 //! frames (each frame's SIFT computed once for all four), their trajectories
 //! overlaid and their metrics in a table.
 
-use super::vo_plot::VoFigures;
+use super::figures::OdometryFigures;
 use crate::model::lab::Source;
 use crate::model::odometry::{compare_runs, kitti_note_text, metric_cells, RunResult};
 use crate::platform::{blob_url, revoke};
@@ -104,7 +104,7 @@ fn start(ctx: Ctx) {
 /// The comparison's button, figures and table, over `count()` frames from 0
 /// (the odometry view's FRAME_ID + 1, or its error).
 #[component]
-pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> impl IntoView {
+pub fn OdometryCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> impl IntoView {
     let ctx = Ctx {
         results: RwSignal::new(Vec::new()),
         truth: RwSignal::new(Vec::new()),
@@ -178,7 +178,7 @@ pub fn VoCompare(source: Signal<Source>, count: Signal<Result<u32, String>>) -> 
             " "<span class="muted" data-testid="vo-compare-status">{move || ctx.status.get()}</span>
             {move || ctx.error.get().map(|e| view! { <p class="error" role="alert" data-testid="vo-compare-error">{e}</p> })}
             <Show when=move || !ctx.results.with(|r| r.is_empty())>
-                <VoFigures truth=ctx.truth.into() runs=plot_runs name="vo-compare"/>
+                <OdometryFigures truth=ctx.truth.into() runs=plot_runs name="vo-compare"/>
                 // Eight columns are wider than a phone: the table scrolls in its own
                 // region, which the keyboard can reach.
                 <div class="table-scroll" tabindex="0" role="region" aria-label="Metrics of the four trackers">

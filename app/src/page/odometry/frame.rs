@@ -5,8 +5,10 @@
 //! and inliers per frame. While the run lasts it follows the newest frame; a
 //! slider (or the arrow keys on it) steps through the frames run so far.
 
-use super::legend::{Legend, Sw};
-use crate::model::vo_frame::{chart_top, chart_x, counts_text, flow_paths, png_size, redetections_text, series_points};
+use crate::model::odometry::frame::{
+    chart_top, chart_x, counts_text, flow_paths, png_size, redetections_text, series_points,
+};
+use crate::page::legend::{Legend, Sw};
 use crate::platform::{blob_url, revoke};
 use crate::protocol::odometry::StepCounts;
 use leptos::prelude::*;
@@ -38,7 +40,7 @@ const SERIES: [Series; 3] = [
 ];
 
 #[component]
-pub fn VoFrameView(
+pub fn OdometryFrameView(
     /// The run's frames as PNG bytes, by frame index.
     frames: StoredValue<Vec<Vec<u8>>, LocalStorage>,
     /// One entry per frame done.
@@ -154,7 +156,7 @@ pub fn VoFrameView(
             .iter()
             .map(|(name, st, _)| {
                 let sw = Sw { style: *st, line: true, outline: false, label: "" };
-                view! { <span class="sw-item">{super::legend::swatch(sw, false)}{format!(" {name} ")}</span> }
+                view! { <span class="sw-item">{crate::page::legend::swatch(sw, false)}{format!(" {name} ")}</span> }
             })
             .collect_view();
         Some(view! {

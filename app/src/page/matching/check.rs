@@ -101,7 +101,16 @@ pub fn SelfCheck() -> impl IntoView {
     let asked_now = move || lab.analysis.with(|a| a.as_ref().and_then(|a| a.as_ref().ok()).map(asked));
     let result =
         Signal::derive(move || checked.with(|c| c.as_ref().filter(|(q, _)| *q == asked_now()).map(|(_, r)| r.clone())));
+    // Pressed while frames are still computed: the answer waits for them and
+    // is checked as soon as they are in, instead of being judged against the
+    // old pair (or dropped when the new one arrives).
+    let pending = RwSignal::new(false);
     let check = move || {
+        if lab.busy() {
+            checked.set(None);
+            pending.set(true);
+            return;
+        }
         let r = match lab.analysis.get_untracked() {
             Some(Ok(a)) => grade(lab, &a.strategy, a.feature, &answer.get_untracked()),
             Some(Err(e)) => Err(e),
@@ -109,6 +118,12 @@ pub fn SelfCheck() -> impl IntoView {
         };
         checked.set(Some((asked_now(), r)));
     };
+    Effect::new(move |_| {
+        if pending.get() && !lab.busy() && lab.analysis.with(Option::is_some) {
+            pending.set(false);
+            untrack(check);
+        }
+    });
     view! {
         <section class="card selfcheck" aria-label="Check my answer">
             <h2>"6 · Check my answer"</h2>
@@ -129,6 +144,11 @@ pub fn SelfCheck() -> impl IntoView {
                 />
                 <button type="submit" class="primary" data-testid="check">"Check my answer"</button>
             </form>
+            <Show when=move || pending.get()>
+                <p class="muted" data-testid="check-pending" role="status">
+                    "The frames are still being computed: your answer will be checked as soon as they are ready."
+                </p>
+            </Show>
             <Outcome result=result/>
         </section>
     }

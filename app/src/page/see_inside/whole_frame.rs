@@ -12,7 +12,6 @@
 //! then cost a binary search.
 
 use super::canvas2d::{context, put_rgba};
-use super::legend::{swatch, Legend, Sw};
 use crate::model::frame::Frame;
 use crate::model::lab::Lab;
 use crate::model::plot::marker_paint;
@@ -20,15 +19,17 @@ use crate::model::see_inside::{
     chart_points, chart_x, chart_xmax, chart_xy, chart_y, counts_text, crossings_text, current, marker_points,
     parse_px, rule_text, Inside,
 };
-use crate::model::whole_frame::{clip_line, ends, filter_pairs, nearest_match, step_pick, Filter, Layout};
+use crate::model::whole_frame::{
+    clip_line, ends, filter_pairs, nearest_match, pick_of, step_pick, true_fundamental, verdict_text, Filter, Layout,
+};
+use crate::page::legend::{swatch, Legend, Sw};
 use crate::protocol::inside::SweepData;
 use crate::services::inside;
 use crate::services::loading;
 use leptos::prelude::*;
 use nalgebra::Matrix3;
-use siftlab_core::matching::epipolar::{epipolar_line, fundamental, sampson};
 use siftlab_core::matching::explain;
-use siftlab_core::matching::{DMatch, Strategy, StrategyKind};
+use siftlab_core::matching::{DMatch, StrategyKind};
 use siftlab_core::pyfmt::py_f32;
 use siftlab_core::render::palette::{self, hex, CORRECT, EPIPOLAR, PICKED, UNJUDGED, WRONG};
 use siftlab_core::render::{flow_frame, whole_frame};
@@ -97,18 +98,6 @@ fn draw(canvas: &web_sys::HtmlCanvasElement, s: &Swept, layout: Layout, pairs: &
     }
 }
 
-/// Everything the picked match's panel says.
-#[derive(Clone, Debug, PartialEq)]
-struct Pick {
-    index: usize,
-    of: usize,
-    query: u32,
-    train: u32,
-    distance: Option<f32>,
-    sampson: Option<f64>,
-    line: Option<[f64; 3]>,
-}
-
 #[component]
 pub fn WholeFrameView() -> impl IntoView {
     let lab = expect_context::<Lab>();
@@ -145,7 +134,7 @@ pub fn WholeFrameView() -> impl IntoView {
                     None
                 }
             };
-            fmat.set(poses.as_ref().and_then(|ab| fundamental(&ab[0], &ab[1], &camera).ok()));
+            fmat.set(true_fundamental(poses.as_ref(), &camera));
             let t0 = crate::platform::now_ms();
             let poses = poses.map(Box::new);
             let (p2, c2) = (p.clone(), c.clone());
@@ -192,24 +181,9 @@ pub fn WholeFrameView() -> impl IntoView {
     });
 
     let pick = Memo::new(move |_| {
-        let [q, t] = picked.get()?;
-        let m = shown.get()?;
-        let index = m.0.iter().position(|&p| p == [q, t])?;
-        let s = swept.get()?;
+        let (pk, m, s) = (picked.get()?, shown.get()?, swept.get()?);
         let Swept(_, p, c) = &s;
-        let (a, b) = (p.features.keypoints.get(q as usize)?, c.features.keypoints.get(t as usize)?);
-        let f = fmat.get();
-        let row = explain(&Strategy::Nn(None), &p.features, &c.features, q as usize).ok();
-        let distance = row.and_then(|e| e.ranked.iter().find(|r| r.train_idx == t as usize).map(|r| r.distance));
-        Some(Pick {
-            index,
-            of: m.0.len(),
-            query: q,
-            train: t,
-            distance,
-            sampson: f.map(|f| sampson(&f, [a.x, a.y], [b.x, b.y])),
-            line: f.map(|f| epipolar_line(&f, [a.x, a.y])),
-        })
+        pick_of(&m.0, pk, &p.features, &c.features, fmat.get().as_ref())
     });
 
     let pick_at = move |ev: web_sys::MouseEvent| {
@@ -293,17 +267,7 @@ pub fn WholeFrameView() -> impl IntoView {
             ex.ranked.get(i).map(|m| format!("d{} = {} (keypoint {})", i + 1, py_f32(m.distance), m.train_idx))
         };
         let near = [nearest(0), nearest(1)].into_iter().flatten().collect::<Vec<_>>().join(", ");
-        let verdict = match pk.sampson {
-            Some(d) => {
-                let ok = d <= px;
-                format!(
-                    "Sampson distance to the true epipolar geometry {d:.3} px {} {px} px: {}",
-                    if ok { "≤" } else { ">" },
-                    if ok { "correct" } else { "wrong" }
-                )
-            }
-            None => "no ground-truth poses: not judged".into(),
-        };
+        let verdict = verdict_text(pk.sampson, px);
         let q = pk.query as usize;
         Some(view! {
             <div

@@ -1,6 +1,6 @@
 //! Loading frames (demo, files, MyKITTI folder) and the progress / error strip.
 
-use super::ManualExamples;
+use super::manual::ManualExamples;
 use crate::model::frameset::describe_ids;
 use crate::model::lab::{Lab, Source, Which};
 use crate::platform::now_ms;

@@ -3,6 +3,8 @@
 //! hover text. The figures themselves are the core's (`render::plot`), the
 //! same the CLI's `--plot` writes.
 
+pub mod frame;
+
 use crate::model::parse::{parse_strategy, threshold_text};
 pub use crate::protocol::odometry::Tracker;
 use siftlab_core::matching::{args, Strategy, StrategyKind};

@@ -5,12 +5,12 @@
 //! its descriptor. Computed in a worker by the core's own pipeline.
 
 use super::canvas2d::{context, gray_rgba, put_rgba};
-use super::legend::{swatch, Sw};
-use super::DescriptorGrid;
 use crate::model::frame::Frame;
 use crate::model::lab::{nearest_keypoint, Lab, Which};
 use crate::model::plot::marker_paint;
 use crate::model::see_inside::{hist_bars, keypoint_place, level_rgba, level_value, Inside};
+use crate::page::legend::{swatch, Sw};
+use crate::page::matching::DescriptorGrid;
 use crate::protocol::inside::{AnatomyData, LevelThumb};
 use crate::services::inside;
 use leptos::prelude::*;

@@ -4,12 +4,13 @@
 //! solid, estimate dashed, in the palette's colours), with the trajectory error and
 //! the lab's window as a PNG to download. A menu swaps LK for the student's
 //! matcher (`vo::matched`); the metrics and the core's figures follow each run,
-//! [`VoFrameView`] shows what the loop did with each frame, and [`VoCompare`]
+//! [`OdometryFrameView`] shows what the loop did with each frame, and [`OdometryCompare`]
 //! runs all four trackers side by side.
 
-use super::vo_compare::VoCompare;
-use super::vo_frame::{FrameStep, VoFrameView};
-use super::vo_plot::VoFigures;
+mod compare;
+mod figures;
+mod frame;
+
 use crate::model::frameset::{run_from_zero, vo_frame_count, vo_range_label};
 use crate::model::lab::Lab;
 use crate::model::odometry::{
@@ -21,6 +22,9 @@ use crate::protocol::odometry::VoReply;
 use crate::services::loading;
 use crate::services::odometry;
 use crate::services::sift_pool;
+use compare::OdometryCompare;
+use figures::OdometryFigures;
+use frame::{FrameStep, OdometryFrameView};
 use leptos::prelude::*;
 use siftlab_core::render::coordinates_text;
 use siftlab_core::vo::TrajectoryMetrics;
@@ -53,7 +57,7 @@ fn workers_text() -> String {
 }
 
 #[component]
-pub fn TrajectoryView() -> impl IntoView {
+pub fn OdometryView() -> impl IntoView {
     let lab = expect_context::<Lab>();
     // The lab's FRAME_ID: the last frame of the run.
     let frame_text = RwSignal::new(String::new());
@@ -241,10 +245,10 @@ pub fn TrajectoryView() -> impl IntoView {
                 </div>
                 <div class="vo-views">
                     <div class="vo-plot">
-                        <VoFigures truth=truth runs=runs name="vo"/>
+                        <OdometryFigures truth=truth runs=runs name="vo"/>
                         <p class="mono small" data-testid="vo-coordinates">{move || coordinates_text(&last())}</p>
                     </div>
-                    <VoFrameView frames=frames steps=frame_steps lk=Signal::derive(move || tracker_run.get() == Tracker::Lk)/>
+                    <OdometryFrameView frames=frames steps=frame_steps lk=Signal::derive(move || tracker_run.get() == Tracker::Lk)/>
                 </div>
             </Show>
             {move || done.get().map(|d| view! {
@@ -266,7 +270,7 @@ pub fn TrajectoryView() -> impl IntoView {
                     {note.map(|t| view! { <p class="small muted" data-testid="vo-kitti">{t}</p> })}
                 }
             })}
-            <VoCompare source=source count=count/>
+            <OdometryCompare source=source count=count/>
         </section>
     }
 }

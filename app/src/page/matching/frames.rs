@@ -2,10 +2,10 @@
 //! selected keypoint (scale and orientation), lines to its matches, and the
 //! green `view_info` circles at the `matching_info` coordinates.
 
-use super::legend::{Legend, Sw};
 use crate::model::frame::Frame;
 use crate::model::lab::{nearest_keypoint, Lab, Which};
 use crate::model::plot::{key_step, keypoint_path, orientation, step_feature, to_composite};
+use crate::page::legend::{Legend, Sw};
 use leptos::prelude::*;
 use siftlab_core::render::palette::{hex, Marker, Style, INFO, SELECTED, SERIES, SOLID};
 use wasm_bindgen::{Clamped, JsCast};

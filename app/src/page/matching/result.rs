@@ -1,6 +1,6 @@
 //! The `ret value:` line exactly as the CLI prints it, and the table of matches.
 
-use super::ManualComparison;
+use super::manual::ManualComparison;
 use crate::model::lab::{Lab, Which};
 use leptos::prelude::*;
 use siftlab_core::pyfmt::py_float;

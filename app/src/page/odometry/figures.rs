@@ -43,7 +43,7 @@ fn scene_xy(ev: &web_sys::MouseEvent, w: u32, h: u32) -> Option<(f64, f64)> {
 
 /// Both figures for `truth` and `runs`; `name` is the exported files' stem.
 #[component]
-pub fn VoFigures(truth: Signal<Vec<P3>>, runs: Signal<Vec<Run>>, name: &'static str) -> impl IntoView {
+pub fn OdometryFigures(truth: Signal<Vec<P3>>, runs: Signal<Vec<Run>>, name: &'static str) -> impl IntoView {
     let top = Memo::new(move |_| {
         let (scene, td) = truth.with(|t| runs.with(|r| trajectory_figure(t, r, W, W)));
         (to_svg(&scene, Some(&format!("{name}-plot"))), scene.height, td)

@@ -2,10 +2,14 @@
 //! SIFT's anatomy of a frame and the whole-frame matching of the pair.
 //! Closed until asked for (they run a worker), and linkable (`see=`).
 
-use super::anatomy::AnatomyView;
-use super::whole_frame::WholeFrameView;
+mod anatomy;
+mod canvas2d;
+mod whole_frame;
+
 use crate::model::see_inside::InsideView;
+use anatomy::AnatomyView;
 use leptos::prelude::*;
+use whole_frame::WholeFrameView;
 
 #[component]
 pub fn SeeInside() -> impl IntoView {
