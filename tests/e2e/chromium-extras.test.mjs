@@ -1,5 +1,5 @@
 // Checks a W3C WebDriver session cannot make, in Chromium only, with Playwright (npm
-// playwright-core driving Debian's Chromium over CDP). The full suite (app.test.mjs) runs
+// playwright-core driving Debian's Chromium over CDP). The full suite (app/*.test.mjs) runs
 // in all three engines; what it cannot see there is seen here:
 // - requests made by the page's Web Workers (Resource Timing and CSP events in the page
 //   cover the page only): every request of page and workers stays on our origin;

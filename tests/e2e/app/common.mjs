@@ -1,0 +1,148 @@
+// Shared by the app's end-to-end files (tests/e2e/app/*.test.mjs): the engine and its
+// inputs, the native CLI as the reference, the page under test and the helpers every view's
+// file uses. Each file calls appSuite() once: node --test runs each file in its own process,
+// so each opens its own browser and server (tests/e2e/harness.mjs), and every case ends by
+// checking that all requests stayed on our origin (CSP violations are recorded as errors
+// too) and that nothing was logged as an error by the page or thrown by its workers.
+import assert from 'node:assert/strict';
+import { execFileSync, spawnSync } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { fileURLToPath } from 'node:url';
+import { suite, ROOT } from '../harness.mjs';
+
+export const ENGINE = process.env.E2E_ENGINE || 'chromium';
+// The odometry cases' FRAME_ID: the whole demo (0–150, the manual's view_trajectory 150,
+// through the first turn) where SIFT takes well under a second a frame, 9 (ten frames)
+// in WebKit (~2 s a frame, no relaxed SIMD).
+export const VO_LAST = Number(process.env.E2E_VO_FRAME_ID || (ENGINE === 'webkit' ? 9 : 150));
+// The frame whose counts and picture the odometry case checks: in the turn (frame 110)
+// when the run reaches it.
+export const VO_SHOWN = Math.min(110, VO_LAST);
+// Whether the engine validates relaxed SIMD (measured: Chromium 156 and Firefox 153 do,
+// WebKitGTK 2.50 does not), i.e. which worker build www/worker.js must pick.
+export const RELAXED = { chromium: true, firefox: true, webkit: false }[ENGINE];
+// tests/e2e/run.sh passes the CLI it built (CARGO_TARGET_DIR honoured).
+export const CLI = process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab');
+export const DATASET = 'www/demo/MyKITTI';
+export const FRAME = (id) => path.join(ROOT, DATASET, 'gray/00/image_0', String(id).padStart(6, '0') + '.png');
+// Screenshots and measured figures: tests/e2e/screenshots/<engine>/ (gitignored).
+export const SHOTS = path.join(path.dirname(fileURLToPath(import.meta.url)), '..', 'screenshots', ENGINE);
+fs.mkdirSync(SHOTS, { recursive: true });
+export const shot = (name) => path.join(SHOTS, name);
+export const metrics = { engine: ENGINE };
+
+// OpenCV dispatches SIFT to AVX-512 kernels (16 lanes) when the CPU has F/CD/BW/DQ/VL, else
+// AVX2 (8); the CLI reproduces the host's build by default, so the app is told the same.
+function hostLanes() {
+  if (process.arch !== 'x64') return 8;
+  const flags = (fs.readFileSync('/proc/cpuinfo', 'utf8').match(/^flags\s*:(.*)$/m) || [, ''])[1].split(/\s+/);
+  return ['avx512f', 'avx512cd', 'avx512bw', 'avx512dq', 'avx512vl'].every((f) => flags.includes(f)) ? 16 : 8;
+}
+export const LANES = hostLanes();
+
+export function cli(args) {
+  return execFileSync(CLI, ['-d', DATASET, ...args], { cwd: ROOT, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+}
+export function cliRet(args) {
+  const out = cli(['get_info', ...args]);
+  const line = out.split('\n').find((l) => l.startsWith('ret value: '));
+  assert.ok(line, out);
+  return line.slice('ret value: '.length);
+}
+// The app's default width (8 lanes, AVX2), whatever the host: what the lab manual's
+// examples and a plain link are computed with.
+export function cliRet8(args) {
+  const out = execFileSync(CLI, ['--opencv-lanes', '8', '-d', DATASET, 'get_info', ...args], { cwd: ROOT, encoding: 'utf8', stdio: ['ignore', 'pipe', 'pipe'] });
+  return out.split('\n').find((l) => l.startsWith('ret value: ')).slice('ret value: '.length);
+}
+const siftCache = new Map();
+export function cliSift(id, lanes = LANES) {
+  const key = `${id}/${lanes}`;
+  if (!siftCache.has(key)) {
+    const json = execFileSync(CLI, ['--opencv-lanes', String(lanes), 'sift', FRAME(id), '--json'], { cwd: ROOT, encoding: 'utf8', maxBuffer: 1 << 28 });
+    siftCache.set(key, JSON.parse(json));
+  }
+  return siftCache.get(key);
+}
+
+
+export let BASE;
+export let page;
+
+// metrics.json gathers the figures of every file of one engine's run: each file adds its
+// own (tests/e2e/run.sh removes the engine's file before the first).
+function saveMetrics() {
+  const file = path.join(SHOTS, 'metrics.json');
+  let old = {};
+  try { old = JSON.parse(fs.readFileSync(file, 'utf8')); } catch { /* first file of the run */ }
+  if (old.engine !== ENGINE) old = {};
+  fs.writeFileSync(file, JSON.stringify({ ...old, ...metrics }, null, 2));
+}
+
+/** The browser, the server of dist/ and a fresh page per case, for one file's cases. */
+export function appSuite() {
+  suite(ENGINE, {
+    onStart: ({ base, browser }) => {
+      assert.ok(fs.existsSync(CLI), `${CLI} missing: cargo build --release --bin siftlab`);
+      BASE = base;
+      metrics.browserVersion = browser.version;
+    },
+    onPage: (p) => { page = p; },
+    onEnd: saveMetrics,
+  });
+}
+
+export const tid = (id) => `[data-testid="${id}"]`;
+export async function idle(p = page) {
+  await p.waitForSelector(tid('keypoint-count-cur'), { timeout: 180000 });
+  await p.waitForSelector(tid('busy'), { state: 'detached', timeout: 180000 });
+}
+export async function settings(algo, t, feature, p = page) {
+  await p.selectOption(tid('algo'), algo);
+  await p.fill(tid('threshold'), t);
+  await p.fill(tid('feature'), String(feature));
+}
+export async function tuple(p = page) {
+  return (await p.textContent(tid('result-tuple'))).trim();
+}
+/** Waits until the tuple on screen is `want` (the update is synchronous, the paint not). */
+export async function tupleIs(want, what) {
+  await page.waitForFunction(([sel, w]) => document.querySelector(sel)?.textContent.trim() === w, [tid('result-tuple'), want], { timeout: 5000 })
+    .catch(() => {});
+  assert.equal(await tuple(), want, what);
+}
+export const ENGINE_LABEL = RELAXED ? 'relaxed SIMD' : 'SIMD128';
+
+function crc32(buf) {
+  let c = ~0;
+  for (const b of buf) {
+    c ^= b;
+    for (let k = 0; k < 8; k++) c = (c >>> 1) ^ (0xedb88320 & -(c & 1));
+  }
+  return ~c >>> 0;
+}
+function chunk(type, data) {
+  const t = Buffer.from(type);
+  const len = Buffer.alloc(4); len.writeUInt32BE(data.length);
+  const crc = Buffer.alloc(4); crc.writeUInt32BE(crc32(Buffer.concat([t, data])));
+  return Buffer.concat([len, t, data, crc]);
+}
+// A tiny file that declares a w×h 8-bit gray PNG (its pixel data is an empty zlib stream).
+export function pngDeclaring(w, h) {
+  const ihdr = Buffer.alloc(13);
+  ihdr.writeUInt32BE(w, 0); ihdr.writeUInt32BE(h, 4); ihdr[8] = 8; ihdr[9] = 0;
+  return Buffer.concat([Buffer.from([137, 80, 78, 71, 13, 10, 26, 10]), chunk('IHDR', ihdr),
+    chunk('IDAT', Buffer.from([0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01])), chunk('IEND', Buffer.alloc(0))]);
+}
+
+// The CLI's view_trajectory with `args` in a scratch folder: its files and stderr.
+export function cliTrajectory(args) {
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo24-'));
+  const vo = spawnSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', ...args, '--metrics', 'm.json', '--plot', 'plot.svg'], { cwd: tmp, encoding: 'utf8' });
+  assert.equal(vo.status, 0, vo.stderr);
+  const out = { stderr: vo.stderr, metrics: JSON.parse(fs.readFileSync(path.join(tmp, 'm.json'), 'utf8')), svg: fs.readFileSync(path.join(tmp, 'plot.svg')) };
+  fs.rmSync(tmp, { recursive: true });
+  return out;
+}

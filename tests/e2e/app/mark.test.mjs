@@ -1,0 +1,142 @@
+// End-to-end tests of the siftlab app (tests/e2e/app/, one file per view; helpers in
+// common.mjs), in the engine E2E_ENGINE names, against the native CLI.
+// "Mark my code" under Pyodide against `siftlab mark --json`: the good and a broken
+// solution, hostile files, an endless loop and refused files.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { spawnSync } from 'node:child_process';
+import fs from 'node:fs';
+import os from 'node:os';
+import path from 'node:path';
+import { ROOT } from '../harness.mjs';
+import {
+  appSuite, ENGINE, CLI, DATASET, shot, metrics, LANES, BASE, page, tid, idle,
+} from './common.mjs';
+
+appSuite();
+
+// "Mark my code": the student's file in Pyodide, marked as the CLI's `siftlab mark` marks
+// it on the same cases (seed and count in the link). Slow engines get fewer calls.
+const MARK_N = Number(process.env.E2E_MARK_N || (ENGINE === 'webkit' ? 1 : 3));
+const MARKS = path.join(ROOT, 'tests/fixtures/mark');
+function cliMark(variant, n, seed) {
+  const r = spawnSync(CLI, ['--opencv-lanes', String(LANES), '-d', DATASET, 'mark', path.join(MARKS, variant, 'vision_tasks.py'),
+    '-n', String(n), '--seed', String(seed), '--json'], { cwd: ROOT, encoding: 'utf8', maxBuffer: 1 << 26 });
+  return JSON.parse(r.stdout);
+}
+async function markFile(variant, n, seed, { file } = {}) {
+  await page.goto(`${BASE}?lanes=${LANES}&mark=${seed}&mn=${n}`);
+  await idle();
+  await page.setInputFiles(tid('mark-file'), file || path.join(MARKS, variant, 'vision_tasks.py'));
+  await page.waitForFunction((sel) => document.querySelector(sel).value.length > 0 || true, tid('mark-source'));
+  await page.waitForFunction((sel) => !document.querySelector(sel).disabled, tid('mark-run'), { timeout: 10000 }).catch(() => {});
+  const t0 = Date.now();
+  await page.click(tid('mark-run'));
+  await page.waitForSelector(`${tid('mark-report')}, ${tid('mark-error')}`, { timeout: 900000 });
+  return (Date.now() - t0) / 1000;
+}
+async function pageMarks() {
+  const rows = await page.evalAll(tid('mark-row'), (tr) => [tr.dataset.task, tr.dataset.marks, tr.dataset.correct, tr.dataset.errors]);
+  const total = await page.getAttribute(tid('mark-total'), 'data-total');
+  // Each task's slowest call (against the 10 s limit), for the figures.
+  metrics.markSlowest = [...(metrics.markSlowest || []), Object.fromEntries(
+    await page.evalAll(tid('mark-row'), (tr) => [tr.dataset.task, Number(tr.dataset.slowest)]))];
+  const diagnoses = await page.evalAll(tid('mark-failure'), (li) => `${li.dataset.task}:${li.dataset.diagnosis}`);
+  return { rows, total, diagnoses };
+}
+// The browser's limit is wall time: WebKit's SIMD128 Pyodide may take over 10 s for an honest
+// dt call (2.25 M DMatch) that the CLI measures as ~2 s of CPU. Only there, a dt time-out is
+// left out of a comparison with the CLI; every other row must be the CLI's.
+function withoutSlowDt(got) {
+  const slowDt = ENGINE === 'webkit' && got.diagnoses.includes('dt:timeout');
+  const keep = (m) => ({
+    rows: m.rows.filter((r) => !(slowDt && r[0] === 'dt')),
+    diagnoses: m.diagnoses.filter((d) => !(slowDt && d.startsWith('dt:'))),
+  });
+  return { slowDt, keep };
+}
+function cliMarks(j) {
+  return {
+    rows: j.tasks.map((t) => [t.task, t.marks.toFixed(2), String(t.correct), String(t.errors)]),
+    total: j.total.toFixed(2),
+    diagnoses: j.cases.filter((r) => r.status !== 'correct').map((r) => `${r.task}:${r.diagnosis}`),
+  };
+}
+
+test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI marks them (${MARK_N} calls per task)`, async () => {
+  const s = await markFile('good', MARK_N, 1);
+  metrics.markGoodS = s;
+  metrics.markTiming = await page.textContent(tid('mark-timing'));
+  const got = await pageMarks();
+  assert.equal(got.total, '20.00', JSON.stringify(got));
+  assert.deepEqual(got, cliMarks(cliMark('good', MARK_N, 1)));
+  await page.elementScreenshot(tid('mark'), shot('mark-good.png'));
+  // The introduction is body text, not bold (it once inherited the ✓ marks' weight).
+  const weight = await page.evaluate((sel) => getComputedStyle(document.querySelector(sel)).fontWeight, tid('mark-intro'));
+  assert.ok(Number(weight) < 600, `the introduction's font-weight is ${weight}`);
+  await markFile('inverted', MARK_N, 1);
+  const bad = await pageMarks();
+  assert.deepEqual(bad, cliMarks(cliMark('inverted', MARK_N, 1)));
+  assert.ok(bad.diagnoses.some((d) => d.startsWith('nndr:')), JSON.stringify(bad));
+  await page.elementScreenshot(tid('mark'), shot('mark-nndr-inverted.png'));
+});
+
+// Hostile files in the browser (tests/fixtures/mark/hostile): the worker runs under the page's
+// CSP, so nothing reaches another origin (a listener on 127.0.0.1:47011 counts connections);
+// forged replies posted to the page and objects that always say "equal" change no mark; a
+// crash (os._exit) and stray output end no marking. The table is the CLI's.
+test('mark my code: hostile files: no connection, no forged mark, the CLI\'s table', async () => {
+  const net = await import('node:net');
+  let connections = 0;
+  const server = net.createServer((s) => { connections += 1; s.destroy(); });
+  await new Promise((ok, fail) => { server.once('error', fail); server.listen(47011, '127.0.0.1', ok); });
+  try {
+    for (const variant of ['hostile/browser_escape', 'hostile/always_equal', 'hostile/wrap_handle', 'hostile/ansi_escapes']) {
+      await markFile(variant, MARK_N, 1);
+      const got = await pageMarks();
+      const cli = cliMarks(cliMark(variant, MARK_N, 1));
+      const { slowDt, keep } = withoutSlowDt(got);
+      assert.deepEqual(keep(got).rows, keep(cli).rows, variant);
+      if (!slowDt) assert.equal(got.total, cli.total, variant);
+      if (variant !== 'hostile/ansi_escapes') assert.deepEqual(keep(got).diagnoses, keep(cli).diagnoses, variant);
+      if (variant === 'hostile/browser_escape' && !slowDt) assert.equal(got.total, '20.00', 'its honest code earns 20');
+      metrics[`markHostile_${variant.split('/')[1]}`] = got.total;
+      // Whatever the file printed or raised, the page shows no control character.
+      const text = await page.textContent(tid('mark'));
+      assert.ok(!/[\u0000-\u0008\u000b-\u001f\u007f-\u009f\u202a-\u202e]/.test(text), `${variant}: a control character in the report`);
+    }
+  } finally {
+    await new Promise((ok) => server.close(ok));
+  }
+  metrics.markHostileConnections = connections;
+  assert.equal(connections, 0, 'a connection reached the listener');
+});
+
+test('mark my code: an endless loop is stopped at 10 s and the page stays usable; bad files get messages', async () => {
+  // One call per task, seed 1: the loop variant's nndr call (t = 0.91, over its 0.9)
+  // runs into the 10 s limit, the worker is replaced, and matching_info is marked after it.
+  await markFile('loop', 1, 1);
+  const got = await pageMarks();
+  const { keep } = withoutSlowDt(got);
+  assert.deepEqual(keep(got), keep(cliMarks(cliMark('loop', 1, 1))));
+  assert.ok(got.diagnoses.includes('nndr:timeout'), JSON.stringify(got));
+  assert.equal(got.rows.find((r) => r[0] === 'matching_info')[1], '5.00', 'marked after the restart');
+  // Files the lab refuses: a clear message, no run, the page usable.
+  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-mark-'));
+  const cases = [
+    ['empty', Buffer.alloc(0)],
+    ['binary', Buffer.from([0x89, 0x50, 0x4e, 0x47, 0x0d, 0x0a, 0x1a, 0x0a, 0, 0, 0, 13])],
+    ['too_large', Buffer.alloc(1 << 20 | 1, 0x61)],
+    ['not_ascii', fs.readFileSync(path.join(MARKS, 'nonascii', 'vision_tasks.py'))],
+  ];
+  for (const [what, bytes] of cases) {
+    const file = path.join(tmp, `${what}.py`);
+    fs.writeFileSync(file, bytes);
+    await markFile('good', 1, 0, { file });
+    const code = await page.getAttribute(tid('mark-rejected'), 'data-code');
+    assert.ok(code, what);
+    assert.equal(await page.getAttribute(tid('mark-total'), 'data-total'), '0.00', what);
+    metrics[`markRejected_${what}`] = await page.textContent(tid('mark-rejected'));
+  }
+  fs.rmSync(tmp, { recursive: true });
+});
