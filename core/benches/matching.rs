@@ -1,6 +1,6 @@
 //! The matcher on a fixture pair's full descriptor sets (1500 x 1500): knn k=2 as
 //! OpenCV's `BFMatcher().knnMatch(des1, des2, k=2)`, and each lab strategy applied to
-//! every query feature, as compared by tests/scripts/bench_compare.sh.
+//! every query feature, as compared by tests/benchmarks/bench_compare.sh.
 
 // criterion is a native dev-dependency: on wasm32 (`cargo clippy --all-targets
 // --target wasm32-unknown-unknown`) this bench is an empty program.

@@ -1,6 +1,6 @@
 //! SIFT detect+compute on a 1241x376 fixture frame (KITTI size), single thread, as
 //! compared with OpenCV's `detectAndCompute` under `cv2.setNumThreads(1)` by
-//! tests/scripts/bench_compare.sh; and the stage that costs most, the five blurs
+//! tests/benchmarks/bench_compare.sh; and the stage that costs most, the five blurs
 //! of the first octave (a 2482x752 plane), on their own.
 
 // criterion is a native dev-dependency: on wasm32 (`cargo clippy --all-targets

@@ -3,7 +3,7 @@
 //! parameters: SIFT keypoint detection (nfeatures 1500, no descriptors), LK
 //! tracking of those points (AVX2 kernels where the CPU has them, and the
 //! portable kernels wasm runs, for the ratio between the two), the essential
-//! matrix by RANSAC and recoverPose. `tests/scripts/compare_vo.py` times the
+//! matrix by RANSAC and recoverPose. `tests/references/compare_vo.py` times the
 //! whole loop against OpenCV's.
 
 // criterion is a native dev-dependency: on wasm32 (`cargo clippy --all-targets

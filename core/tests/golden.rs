@@ -1,7 +1,7 @@
 //! Golden tests: our SIFT against OpenCV 4.8.0.76 on the committed fixture frames.
 //!
 //! The goldens in `tests/fixtures/{golden-avx2,golden}/{noipp,ipp}/NNNNNN.sift` were
-//! written by `tests/scripts/gen_goldens.py` from `cv2.SIFT_create(nfeatures=1500)`:
+//! written by `tests/references/gen_goldens.py` from `cv2.SIFT_create(nfeatures=1500)`:
 //! `golden-avx2` on an AVX2 CPU (OpenCV's SIFT kernels 8 lanes wide) on the bundled
 //! KITTI frames `www/demo/MyKITTI` (0–5 and the manual's 119, 120, 149, 150), and
 //! `golden` on an AVX-512 CPU (16 lanes; docs/fidelity.md §SIFT-13) on the synthetic frames of
@@ -232,7 +232,7 @@ struct Draw {
     want: String,
 }
 
-/// The golden `get_info` draws (tests/scripts/gen_goldens.py): frame, feature,
+/// The golden `get_info` draws (tests/references/gen_goldens.py): frame, feature,
 /// strategy, threshold and the `ret value:` the lab's Python printed on the default wheel.
 fn get_info_draws(set: &GoldenSet) -> Vec<Draw> {
     let path = set.dir().join("get_info.jsonl");

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Two siftlab builds' SIFT, interleaved round after round on one core: the speed ratio.
 
-    python3 tests/scripts/ab_sift.py OLD_BINARY NEW_BINARY [--rounds 6] [--repeat 5] [--dataset DIR]
+    python3 tests/benchmarks/ab_sift.py OLD_BINARY NEW_BINARY [--rounds 6] [--repeat 5] [--dataset DIR]
 
 The companion of ab_vo.py for the SIFT kernels. Each round runs `siftlab sift FRAME --repeat R`
 (the best of R runs, decode excluded) with both builds back to back, pinned to core 0, the

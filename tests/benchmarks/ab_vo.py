@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Two siftlab builds' `view_trajectory`, interleaved round after round: wall and CPU time.
 
-    python3 tests/scripts/ab_vo.py OLD_BINARY NEW_BINARY [--rounds 8] [--dataset DIR] [--frames 99]
+    python3 tests/benchmarks/ab_vo.py OLD_BINARY NEW_BINARY [--rounds 8] [--dataset DIR] [--frames 99]
 
 On this shared VM the speed drifts by up to 1.6x within minutes, so a change is judged by
 the per-round ratios of two builds run back to back (the order alternating every round),

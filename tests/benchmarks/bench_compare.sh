@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Speed of siftlab against OpenCV 4.8.0.76, measured in ONE run on the same frames:
-#   - OpenCV single-thread: tests/scripts/bench_opencv.py (SIFT detect+compute, knnMatch k=2)
+#   - OpenCV single-thread: tests/benchmarks/bench_opencv.py (SIFT detect+compute, knnMatch k=2)
 #   - ours, natively: the criterion benches core/benches/{sift,matching}.rs, once pinned to
 #     one core (taskset -c 0, so the core's scoped threads see one CPU) and once on all cores
 #   - ours in headless Chromium: the wasm test core/tests/wasm_golden.rs prints its times
 # and prints ours/OpenCV ratios. Targets (issue [1]): SIFT <= 0.5x OpenCV single-thread;
 # dt/nn/nndr over all 1500x1500 descriptor pairs <= 0.5x knnMatch(k=2).
 #
-# Usage: tests/scripts/bench_compare.sh [--dataset DIR] [--no-wasm] [--quick] [--report-only]
+# Usage: tests/benchmarks/bench_compare.sh [--dataset DIR] [--no-wasm] [--quick] [--report-only]
 # (--report-only prints the table again from the last run's results.)
 # Dataset default: www/demo/MyKITTI (the bundled real KITTI 00 frames).
 # Needs python3 with opencv-contrib-python-headless==4.8.0.76 and numpy<2.
@@ -52,7 +52,7 @@ echo "== building benches" >&2
 cargo bench -p siftlab-core --bench sift --bench matching --no-run >&2
 
 echo "== OpenCV (single thread)" >&2
-python3 tests/scripts/bench_opencv.py --dataset "$DATASET" --frames 1 --repeat 7 | tee "$OUT/opencv.json" >&2
+python3 tests/benchmarks/bench_opencv.py --dataset "$DATASET" --frames 1 --repeat 7 | tee "$OUT/opencv.json" >&2
 
 echo "== siftlab, one core (taskset -c 0)" >&2
 taskset -c 0 cargo bench -p siftlab-core --bench sift --bench matching -- "${CRIT_ARGS[@]}" --save-baseline one_core >&2

@@ -12,7 +12,7 @@ each side's best of R runs, decode excluded. The round's ratios are ours / OpenC
 the report gives each round and the median. Target (issue [1]): SIFT <= 0.5x OpenCV's
 single-thread time natively.
 
-Usage: python3 tests/scripts/bench_interleaved.py [--dataset DIR] [--rounds 6] [--repeat 5]
+Usage: python3 tests/benchmarks/bench_interleaved.py [--dataset DIR] [--rounds 6] [--repeat 5]
        [--frame 0] [--binary target/release/siftlab] [--json FILE]
 Needs opencv-contrib-python-headless==4.8.0.76, numpy<2 and a release build of siftlab.
 """

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Time `siftlab mark` on the correct solution, two builds interleaved (docs/marking.md).
 
-    python3 tests/scripts/bench_mark.py --before OLD_SIFTLAB [--after target/release/siftlab]
+    python3 tests/benchmarks/bench_mark.py --before OLD_SIFTLAB [--after target/release/siftlab]
         [--rounds 3] [-n 25] [--seed 0] [--extra-after=--no-sandbox]
 
 Each round runs both builds, alternating which goes first, on the bundled frames at

@@ -10,7 +10,7 @@
 
 A Rust-side bench runner calls this in the same run and divides its own times by these.
 
-Usage: python3 tests/scripts/bench_opencv.py [--dataset DIR] [--repeat 5] [--frames 3] [--knn-all]
+Usage: python3 tests/benchmarks/bench_opencv.py [--dataset DIR] [--repeat 5] [--frames 3] [--knn-all]
 Dataset default: www/demo/MyKITTI (the bundled real KITTI 00 frames).
 """
 from __future__ import annotations

@@ -3,7 +3,7 @@
 // page in turn, each page kept open (warm) and fed one frame at a time, as
 // tests/e2e/bench.mjs does (each round on freshly loaded pages: a page keeps the SIFT of a
 // frame it has seen). Medians per page, and the portable/relaxed ratio per site.
-//   node tests/scripts/bench_simd128.mjs --a /tmp/dist-before --b dist [--engine chromium|webkit] [--rounds 1]
+//   node tests/benchmarks/bench_simd128.mjs --a /tmp/dist-before --b dist [--engine chromium|webkit] [--rounds 1]
 // Chromium (playwright-core) opens four pages: each site with the relaxed-SIMD worker and
 // with `?wasm=portable`. WebKitGTK (WebDriver, under xvfb-run) has no relaxed SIMD, so two
 // sessions, one per site. Prints JSON.

@@ -7,7 +7,7 @@
 #   4. the app in headless Chromium, both wasm builds (tests/e2e/bench.mjs), if dist/ is
 #      served at $BASE_URL (default http://127.0.0.1:8080/; start it with www/serve).
 #
-#   tests/scripts/measure_all.sh [--dataset DIR] [--frames N] [--no-browser]
+#   tests/benchmarks/measure_all.sh [--dataset DIR] [--frames N] [--no-browser]
 #
 # The dataset defaults to www/demo/MyKITTI (the bundled real KITTI 00 frames). Each step's
 # full output goes to target/measure/<step>.txt; the summary lines are printed at the end.
@@ -41,11 +41,11 @@ FR=()
 echo "== dataset $DATASET" | tee "$OUT/summary.txt"
 
 echo "== 1/4 fidelity (compare_opencv.py)" >&2
-python3 tests/scripts/compare_opencv.py --dataset "$DATASET" "${FR[@]}" --json "$OUT/fidelity.json" > "$OUT/fidelity.txt" || true
+python3 tests/references/compare_opencv.py --dataset "$DATASET" "${FR[@]}" --json "$OUT/fidelity.json" > "$OUT/fidelity.txt" || true
 echo "== 2/4 odometry (compare_vo.py --repeat 3)" >&2
-python3 tests/scripts/compare_vo.py --dataset "$DATASET" "${FR[@]}" --repeat 3 > "$OUT/vo.txt"
+python3 tests/references/compare_vo.py --dataset "$DATASET" "${FR[@]}" --repeat 3 > "$OUT/vo.txt"
 echo "== 3/4 SIFT speed (bench_interleaved.py)" >&2
-python3 tests/scripts/bench_interleaved.py --dataset "$DATASET" --json "$OUT/sift_speed.json" > "$OUT/sift_speed.txt"
+python3 tests/benchmarks/bench_interleaved.py --dataset "$DATASET" --json "$OUT/sift_speed.json" > "$OUT/sift_speed.txt"
 if [ "$BROWSER" = 1 ]; then
     BASE_URL="${BASE_URL:-http://127.0.0.1:8080/}"
     if curl -sf -o /dev/null "$BASE_URL"; then

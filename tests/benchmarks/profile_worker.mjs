@@ -2,7 +2,7 @@
 // loads the page on the demo pair (its workers detect frames 0 and 1), samples every worker
 // from its first instruction (CDP auto-attach, paused at start) until the page is idle, and
 // prints each function's self time, summed over the workers, heaviest first.
-//   node tests/scripts/profile_worker.mjs BASE_URL [--portable] [--top 25]
+//   node tests/benchmarks/profile_worker.mjs BASE_URL [--portable] [--top 25]
 // (dist/ built with SIFTLAB_WASM_NAMES=1 www/build, or functions show as wasm-function[N];
 // served at BASE_URL, e.g. python3 -m http.server -d dist 8080). Raw CDP over the
 // DevTools WebSocket: Playwright cannot send commands to a worker's flattened session.

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """File-level import graph of the workspace's Rust crates, and its cycles.
 
-    python3 tests/scripts/import_graph.py [CRATE_ROOT.rs ...] [--edges] [--dot]
+    python3 tests/gates/import_graph.py [CRATE_ROOT.rs ...] [--edges] [--dot]
                                           [--skip-test-modules] [--verbose]
 
 With no root given it reads core/src/lib.rs and app/src/lib.rs (relative to the

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Self-test of import_graph.py on small synthetic crates in a temp dir.
 
-    python3 tests/scripts/test_import_graph.py
+    python3 tests/gates/test_import_graph.py
 """
 
 import contextlib

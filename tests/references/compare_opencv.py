@@ -18,7 +18,7 @@ it, 100% bit-exact vs OPENCV_IPP=disabled, get_info identical on every draw (to 
 wheel's stdout, or — only where that wheel's closed IPP exp/magnitude moved a descriptor by 1 — to
 the IPP-disabled build's stdout; both are computed, in separate processes).
 
-Usage: python3 tests/scripts/compare_opencv.py [--dataset DIR] [--siftlab target/release/siftlab]
+Usage: python3 tests/references/compare_opencv.py [--dataset DIR] [--siftlab target/release/siftlab]
                                                 [--draws 250] [--seed 1] [--frames N] [--json FILE]
 Dataset default: www/demo/MyKITTI (the bundled real KITTI 00 frames).
 """

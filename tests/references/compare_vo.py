@@ -1,10 +1,10 @@
 #!/usr/bin/env python3
 """siftlab's visual odometry against the lab's OpenCV 4.8 pipeline, in the same run.
 
-    python3 tests/scripts/compare_vo.py [--dataset DIR] [--frames N] [--repeat K] [--baseline BIN] [--json]
+    python3 tests/references/compare_vo.py [--dataset DIR] [--frames N] [--repeat K] [--baseline BIN] [--json]
                                         [--opencv-lanes {8,16}] [--no-ipp] [-a ALGO [-t T]]
 
-Runs tests/scripts/vo_reference.py's loop (in this process) and
+Runs tests/references/vo_reference.py's loop (in this process) and
 `target/release/siftlab -d DIR view_trajectory N --save-poses ... --trace ...` (a subprocess;
 build it first with `cargo build --release --bin siftlab`), alternating K times, and reports for both:
 the absolute trajectory error (RMSE of the position differences to the ground truth, no
@@ -24,8 +24,8 @@ bit for bit (both are read by vo_reference.py before cv2 is imported). -a ALGO [
 matcher-driven loop (vo_matched_reference.py) with `view_trajectory -a ALGO -t T` instead; its
 reference is the IPP-off build, so give --no-ipp.
 
-    python3 tests/scripts/compare_vo.py --no-ipp --opencv-lanes 8 --frames 151      # the README's row
-    python3 tests/scripts/compare_vo.py --no-ipp --opencv-lanes 8 --frames 151 -a dt -t 200
+    python3 tests/references/compare_vo.py --no-ipp --opencv-lanes 8 --frames 151      # the README's row
+    python3 tests/references/compare_vo.py --no-ipp --opencv-lanes 8 --frames 151 -a dt -t 200
 
 The dataset defaults to www/demo/MyKITTI (the bundled real KITTI 00 frames, 0-150).
 Requires opencv-contrib-python-headless==4.8.0.76 and numpy<2.

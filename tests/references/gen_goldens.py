@@ -29,7 +29,7 @@ dataset); the default --out is the one that fits the CPU running the script:
   tests/fixtures/golden        an AVX-512 CPU: OpenCV's SIFT kernels 16 lanes wide
   tests/fixtures/golden-avx2   an AVX2 CPU without AVX-512: 8 lanes
 
-Usage: python3 tests/scripts/gen_goldens.py [--dataset DIR] [--out DIR] [--draws 300] [--seed 24011]
+Usage: python3 tests/references/gen_goldens.py [--dataset DIR] [--out DIR] [--draws 300] [--seed 24011]
 """
 from __future__ import annotations
 

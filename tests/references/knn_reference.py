@@ -2,7 +2,7 @@
 """The knnMatch golden for siftlab's cv2 shim: OpenCV 4.8's BFMatcher().knnMatch on the lab
 manual's pair 119 -> 120, for a few queries chosen for their ties.
 
-    python3 tests/scripts/knn_reference.py [--dataset DIR] [--out FILE]
+    python3 tests/references/knn_reference.py [--dataset DIR] [--out FILE]
 
 Writes (default tests/fixtures/mark/knn_119_120.json) one JSON object:
   {"frames": [119, 120], "opencv": "4.8.0", "lanes": 8, "ipp": false, "nq": N1, "nt": N2,

@@ -4,9 +4,9 @@
 cases of its own from a seed). `siftlab mark` and the app must give every file the marks
 this script gives it (docs/marking.md).
 
-    python3 tests/scripts/mark_reference.py STUDENT.py --cases REPORT.json [--out FILE]
-    python3 tests/scripts/mark_reference.py STUDENT.py --seed 0 [-n 25] [--out FILE]
-    python3 tests/scripts/mark_reference.py STUDENT.py --cases REPORT.json --compare
+    python3 tests/references/mark_reference.py STUDENT.py --cases REPORT.json [--out FILE]
+    python3 tests/references/mark_reference.py STUDENT.py --seed 0 [-n 25] [--out FILE]
+    python3 tests/references/mark_reference.py STUDENT.py --cases REPORT.json --compare
 
 --cases takes `siftlab mark --json`'s output (an object with "cases") or a bare list of
 cases, each {"task", "frame", "threshold", "strategy"?, "feature"?} (docs/marking.md,

@@ -2,7 +2,7 @@
 """`siftlab match_all` on OpenCV + numpy: every match of the lab's strategy between frames
 F-1 and F, judged by the ground-truth epipolar geometry, as counts, and match by match on one pair.
 
-    python3 tests/scripts/match_all_reference.py [--dataset DIR] [--out FILE] [--records DIR]
+    python3 tests/references/match_all_reference.py [--dataset DIR] [--out FILE] [--records DIR]
 
 With poses P_prev, P_cur (camera to world, poses/00.txt), [R|t] = inv(P_cur) @ P_prev,
 F = inv(K).T @ [t]x R @ inv(K) (KITTI 00 camera 0, as the lab hard-codes it), a match from

@@ -154,7 +154,7 @@ def main():
               % (alg, t, x, y, z, min(counts), max(counts), frames / s, cv2.__version__, vo.opencv_lanes()))
     if a.fixtures:
         vo.write_json(os.path.join(FIXTURE_DIR, "meta.json"), vo.fixture_meta(frames, {
-            "loop": "the matcher-driven loop (tests/scripts/vo_matched_reference.py --fixtures)",
+            "loop": "the matcher-driven loop (tests/references/vo_matched_reference.py --fixtures)",
             "runs": {name: {"algorithm": alg, "threshold": t} for alg, t, name in FIXTURES},
             "files": {"NAME.txt": "KITTI pose lines, frames 0..%d" % (frames - 1),
                       "NAME.trace.jsonl": "per-frame counts, vo::StepResult names"}}))

@@ -346,7 +346,7 @@ def main():
         write_trace(args.trace, trace)
     if args.fixtures:
         extra = {
-            "loop": "the lab's LK loop (tests/scripts/vo_reference.py --fixtures%s)"
+            "loop": "the lab's LK loop (tests/references/vo_reference.py --fixtures%s)"
                     % (" --camera-fixture" if args.camera_fixture else ""),
             "files": {"poses.txt": "KITTI pose lines, frames 0..%d" % (frames - 1),
                       "trace.jsonl": "per-frame counts, vo::StepResult names"}}

@@ -35,7 +35,7 @@ marking folder, /tmp/siftlab-mark-0-hostilecheck-*/ with siftlab_harness.py and 
 Prints one PASS/FAIL line per fixture with the reasons, then a summary; exit status 1 when
 any fixture fails (2: nothing to run).
 
-    python3 tests/scripts/hostile_check.py [NAME...] [--only NAME] [--siftlab PATH]
+    python3 tests/security/hostile_check.py [NAME...] [--only NAME] [--siftlab PATH]
         [--dataset DIR] [-n 2] [--seed 0] [--timeout 600] [--no-sandbox] [--keep] [-v]
 
 As a module: `hostile_check.check(name, **options) -> dict` (keys name, ok, reasons, total,

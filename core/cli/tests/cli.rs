@@ -96,7 +96,7 @@ fn library_features(frame: usize) -> std::sync::Arc<Features> {
         .clone()
 }
 
-/// Each line of the primary set's `get_info.jsonl` (tests/scripts/gen_goldens.py)
+/// Each line of the primary set's `get_info.jsonl` (tests/references/gen_goldens.py)
 /// holds one `get_info` call on the bundled frames, `{"dataset_frame", "feature",
 /// "algo", "threshold"}`, and the exact stdout the lab's Python + OpenCV printed for
 /// `-d www/demo/MyKITTI`, so the CLI runs from the repository root with that path.

@@ -5,7 +5,7 @@
 //!
 //! The marking runs on frames 0-3 of the bundled KITTI frames (copied to a
 //! scratch dataset, so SIFT runs on 4 frames) with `--opencv-lanes 8`, the
-//! build the reference marker (tests/scripts/mark_reference.py) reproduces;
+//! build the reference marker (tests/references/mark_reference.py) reproduces;
 //! seed 92 with 3 calls per task draws cases on which every mistake shows
 //! (a dt threshold of 500.0 that some distance equals, nn with None, empty
 //! and non-empty matching_info cases). The expected marks are the reference

@@ -3,7 +3,7 @@
 //! `poses/NN.txt`) give the lab layout's output byte for byte; with
 //! sequence 03's camera in `calib.txt` the odometry equals OpenCV's loop run
 //! with that camera (tests/fixtures/vo_kitti03, written by
-//! `tests/scripts/vo_reference.py --fixtures --camera-fixture`); and every
+//! `tests/references/vo_reference.py --fixtures --camera-fixture`); and every
 //! broken dataset gets one clear message and a non-zero exit.
 
 use std::fs;

@@ -1,6 +1,6 @@
 //! Whole-frame matching judged by the true geometry, against OpenCV + numpy:
 //! `tests/fixtures/match_all.jsonl` was written by
-//! `tests/scripts/match_all_reference.py` (OpenCV 4.8.0 without IPP, so its
+//! `tests/references/match_all_reference.py` (OpenCV 4.8.0 without IPP, so its
 //! keypoints are siftlab's bit for bit). Plus the CLI's `match_all` and
 //! `anatomy` output, and the sweep against the same golden.
 

@@ -15,7 +15,7 @@ mod format;
 pub use format::{meta_lanes, parse_golden, Golden};
 
 /// One committed set of OpenCV goldens, written by
-/// `tests/scripts/gen_goldens.py` on one CPU: `noipp/`, `ipp/`,
+/// `tests/references/gen_goldens.py` on one CPU: `noipp/`, `ipp/`,
 /// `get_info.jsonl` and `meta.json`, which records the dataset the goldens
 /// were computed on and the SIMD width OpenCV's dispatched SIFT kernels ran
 /// with (docs/fidelity.md §SIFT-13: 16 on AVX-512, 8 on AVX2). The width is taken from there,
