@@ -19,7 +19,7 @@ wheel's stdout, or — only where that wheel's closed IPP exp/magnitude moved a 
 the IPP-disabled build's stdout; both are computed, in separate processes).
 
 Usage: python3 tests/references/compare_opencv.py [--dataset DIR] [--siftlab target/release/siftlab]
-                                                [--draws 250] [--seed 1] [--frames N] [--json FILE]
+                                                   [--draws 250] [--seed 1] [--frames N] [--json FILE]
 Dataset default: www/demo/MyKITTI (the bundled real KITTI 00 frames).
 """
 from __future__ import annotations

@@ -2,7 +2,7 @@
 """siftlab's visual odometry against the lab's OpenCV 4.8 pipeline, in the same run.
 
     python3 tests/references/compare_vo.py [--dataset DIR] [--frames N] [--repeat K] [--baseline BIN] [--json]
-                                        [--opencv-lanes {8,16}] [--no-ipp] [-a ALGO [-t T]]
+                                           [--opencv-lanes {8,16}] [--no-ipp] [-a ALGO [-t T]]
 
 Runs tests/references/vo_reference.py's loop (in this process) and
 `target/release/siftlab -d DIR view_trajectory N --save-poses ... --trace ...` (a subprocess;
