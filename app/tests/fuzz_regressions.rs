@@ -1,9 +1,9 @@
 //! Replays the app target's fuzz findings (`tests/fuzz/regressions/app_state/`)
-//! through the checks the cargo-fuzz target runs (`fuzz/src/app_checks.rs`),
+//! through the checks the cargo-fuzz target runs (`tests/fuzz/src/app_checks.rs`),
 //! natively on stable Rust. docs/fuzzing.md.
 #![cfg(not(target_arch = "wasm32"))]
 
-#[path = "../../fuzz/src/app_checks.rs"]
+#[path = "../../tests/fuzz/src/app_checks.rs"]
 mod checks;
 
 #[test]

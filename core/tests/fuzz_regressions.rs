@@ -1,11 +1,11 @@
 //! Replays every input the fuzzers found (and minimised) under
 //! `tests/fuzz/regressions/<target>/` through the same checks the cargo-fuzz
-//! targets run (`fuzz/src/core_checks.rs`, included below), on stable Rust:
+//! targets run (`tests/fuzz/src/core_checks.rs`, included below), on stable Rust:
 //! a fixed finding stays fixed without nightly in CI. The app's target is
 //! replayed by `app/tests/fuzz_regressions.rs`. docs/fuzzing.md.
 #![cfg(not(target_arch = "wasm32"))]
 
-#[path = "../../fuzz/src/core_checks.rs"]
+#[path = "../../tests/fuzz/src/core_checks.rs"]
 mod checks;
 
 use std::path::PathBuf;

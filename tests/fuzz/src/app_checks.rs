@@ -1,7 +1,7 @@
 //! The oracles of the app's fuzz target: the URL state, the worker message
 //! checks, the pasted-answer reader, the frame-range texts and the exercise
 //! draws, all natively (the functions take plain Rust values). Included by
-//! `fuzz/fuzz_targets/app_state.rs` and by the stable replay test
+//! `tests/fuzz/fuzz_targets/app_state.rs` and by the stable replay test
 //! `app/tests/fuzz_regressions.rs`.
 #![allow(dead_code)]
 

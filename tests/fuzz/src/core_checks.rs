@@ -1,5 +1,5 @@
 //! The oracles of the core's fuzz targets. One file, included by the
-//! cargo-fuzz targets (`fuzz/fuzz_targets/*.rs`, nightly) and by the stable
+//! cargo-fuzz targets (`tests/fuzz/fuzz_targets/*.rs`, nightly) and by the stable
 //! replay test `core/tests/fuzz_regressions.rs`, so a committed finding is
 //! replayed through exactly the checks that found it. A check panics only on
 //! a bug: a panic inside the core, a wrong answer, or a refusal without a

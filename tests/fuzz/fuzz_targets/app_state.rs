@@ -1,5 +1,5 @@
 #![no_main]
-//! See fuzz/src/app_checks.rs and docs/fuzzing.md.
+//! See tests/fuzz/src/app_checks.rs and docs/fuzzing.md.
 
 #[path = "../src/app_checks.rs"]
 mod checks;

@@ -1,5 +1,5 @@
 #![no_main]
-//! See fuzz/src/core_checks.rs and docs/fuzzing.md.
+//! See tests/fuzz/src/core_checks.rs and docs/fuzzing.md.
 
 #[path = "../src/core_checks.rs"]
 mod checks;
