@@ -1,10 +1,16 @@
-//! The little JSON the harness protocol needs (the core has no serde): a
-//! reader that keeps integers exact and floats as the f64 their text names
-//! (Python's `json` writes `repr(float)`, which round-trips, and `NaN`,
-//! `Infinity`, `-Infinity`), and a writer that escapes everything outside
-//! printable ASCII, so any pipe encoding carries it.
+//! JSON, the one reader and writer of the workspace (the core has no serde):
+//! the marking's harness protocol and reports (`siftlab-mark`), the CLI's
+//! class files, and the tests' goldens and `--json` outputs.
+//!
+//! The reader keeps integers exact ([`Json::Int`], or their digits in
+//! [`Json::BigInt`]) and other numbers as the f64 their text names; it takes
+//! what Python's `json` writes (`repr(float)`, which round-trips, and `NaN`,
+//! `Infinity`, `-Infinity`). [`Json::as_f32`] gives the f32 a number's text
+//! names. The writer ([`Json::to_json`], [`push_str`], [`push_f64`]) escapes
+//! everything outside printable ASCII, so any pipe encoding carries it, and
+//! writes floats as Python's `repr`.
 
-use siftlab_core::pyfmt::{py_float, py_str};
+use crate::pyfmt::{py_float, py_str};
 
 /// A JSON value. Integers that do not fit an i128 keep their digits.
 #[derive(Clone, Debug, PartialEq)]
@@ -47,6 +53,28 @@ impl Json {
         match *self {
             Json::Int(v) => i64::try_from(v).ok(),
             Json::Float(f) if f.fract() == 0.0 && f.abs() < 9.2e18 => Some(f as i64),
+            _ => None,
+        }
+    }
+
+    /// A number as the f32 its text names, as `text.parse::<f32>()` reads
+    /// it: from the f64 the reader kept, which rounds to the same f32 unless
+    /// it lies exactly halfway between two f32s. There the text's side is
+    /// lost and the answer is `None` (no f32's shortest text, nor the exact
+    /// f64 value of an f32 as Python writes it, lands there in practice).
+    pub fn as_f32(&self) -> Option<f32> {
+        match self {
+            // i128 → f32 rounds to nearest, ties to even, as parsing does.
+            Json::Int(v) => Some(*v as f32),
+            Json::BigInt(s) => s.parse().ok(),
+            Json::Float(f) => {
+                let g = *f as f32;
+                // The f32 on the other side of `f` from `g`: the two
+                // straddle `f`; halfway between them the text decides.
+                let other = if (g as f64) < *f { g.next_up() } else { g.next_down() };
+                let halfway = f.is_finite() && (g as f64 + other as f64) / 2.0 == *f && g as f64 != *f;
+                (!halfway).then_some(g)
+            }
             _ => None,
         }
     }
@@ -144,7 +172,8 @@ impl Json {
         s
     }
 
-    pub(crate) fn write(&self, out: &mut String) {
+    /// Appends [`Json::to_json`]'s text to `out`.
+    pub fn write(&self, out: &mut String) {
         match self {
             Json::Null => out.push_str("null"),
             Json::Bool(b) => out.push_str(if *b { "true" } else { "false" }),
@@ -180,7 +209,7 @@ impl Json {
 
 /// A finite f64 as Python's `repr` (valid JSON: `1e-05`, `1.5e+16`); a
 /// non-finite one as `null`.
-pub(crate) fn push_f64(out: &mut String, v: f64) {
+pub fn push_f64(out: &mut String, v: f64) {
     if v.is_finite() {
         out.push_str(&py_float(v));
     } else {
@@ -190,7 +219,7 @@ pub(crate) fn push_f64(out: &mut String, v: f64) {
 
 /// `s` as a JSON string literal, escaping quotes, backslashes, control
 /// characters and everything outside ASCII (`\uXXXX`, surrogate pairs).
-pub(crate) fn push_str(out: &mut String, s: &str) {
+pub fn push_str(out: &mut String, s: &str) {
     out.push('"');
     for c in s.chars() {
         match c {
@@ -212,7 +241,7 @@ pub(crate) fn push_str(out: &mut String, s: &str) {
 }
 
 /// `s` as a JSON string literal.
-pub(crate) fn quote(s: &str) -> String {
+pub fn quote(s: &str) -> String {
     let mut out = String::with_capacity(s.len() + 2);
     push_str(&mut out, s);
     out
@@ -475,6 +504,19 @@ mod tests {
             parse(r#"{"a": null, "b": true, "c": "it's"}"#).unwrap().py_repr(),
             "{'a': None, 'b': True, 'c': \"it's\"}"
         );
+    }
+
+    #[test]
+    fn f32_as_its_text_names_it() {
+        for text in ["0.1", "226.12345", "1e-45", "3.4028235e38", "-0.0", "16777217", "12"] {
+            let want: f32 = text.parse().unwrap();
+            assert_eq!(parse(text).unwrap().as_f32().map(f32::to_bits), Some(want.to_bits()), "{text}");
+        }
+        // An f32's exact value as Python writes it (repr of the f64).
+        assert_eq!(parse("61.400001525878906").unwrap().as_f32(), Some(61.4f32));
+        // Exactly halfway between 1 and the next f32: the text's side is lost.
+        assert_eq!(parse("1.000000059604644775390625").unwrap().as_f32(), None);
+        assert_eq!(parse("\"1\"").unwrap().as_f32(), None);
     }
 
     #[test]

@@ -17,6 +17,7 @@ pub mod dataset;
 pub mod error;
 mod gray_png;
 pub mod image;
+pub mod json;
 pub mod manual;
 pub mod matching;
 mod par;

@@ -5,7 +5,6 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 mod golden_data;
-mod json_mini;
 
 use golden_data::kitti;
 use siftlab_core::sift::anatomy::{anatomy, Rejection};

@@ -17,9 +17,9 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 mod golden_data;
-mod json_mini;
 
 use golden_data::{golden_sets, kitti, primary_set, set_frames, Golden, GoldenSet};
+use siftlab_core::json;
 
 use std::collections::HashMap;
 use std::fs;
@@ -241,13 +241,13 @@ fn get_info_draws(set: &GoldenSet) -> Vec<Draw> {
         .filter(|l| !l.trim().is_empty())
         .enumerate()
         .map(|(i, line)| {
-            let rec = json_mini::parse(line).unwrap_or_else(|e| panic!("line {}: {e}", i + 1));
-            let stdout = rec.get("stdout").and_then(|v| v.str()).expect("stdout");
+            let rec = json::parse(line).unwrap_or_else(|e| panic!("line {}: {e}", i + 1));
+            let stdout = rec.get("stdout").and_then(|v| v.as_str()).expect("stdout");
             Draw {
-                frame: rec.get("dataset_frame").and_then(|v| v.i64()).expect("dataset_frame") as usize,
-                feature: rec.get("feature").and_then(|v| v.i64()).expect("feature") as usize,
-                algo: rec.get("algo").and_then(|v| v.str()).expect("algo").to_owned(),
-                threshold: rec.get("threshold").and_then(|v| v.f64()),
+                frame: rec.get("dataset_frame").and_then(|v| v.as_i64()).expect("dataset_frame") as usize,
+                feature: rec.get("feature").and_then(|v| v.as_i64()).expect("feature") as usize,
+                algo: rec.get("algo").and_then(|v| v.as_str()).expect("algo").to_owned(),
+                threshold: rec.get("threshold").and_then(|v| v.as_f64()),
                 want: stdout.lines().find_map(|l| l.strip_prefix("ret value: ")).expect("ret value line").to_owned(),
             }
         })

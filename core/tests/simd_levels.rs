@@ -13,7 +13,6 @@
 #![cfg(all(not(target_arch = "wasm32"), target_arch = "x86_64"))]
 
 mod golden_data;
-mod json_mini;
 
 use std::fs;
 

@@ -12,8 +12,8 @@
 
 #[path = "golden_data/format.rs"]
 mod golden_format;
-mod json_mini;
 
+use siftlab_core::json;
 use siftlab_core::matching::{knn_match, match_feature, matching_info, Strategy};
 use siftlab_core::sift::{detect_and_compute, Features, KeyPoint, SiftParams};
 use siftlab_core::GrayImage;
@@ -193,14 +193,14 @@ fn matching_in_the_browser_equals_the_lab() {
     // Every get_info golden for this pair (FRAME_ID 1 = frames 0 and 1).
     let (mut checked, mut failures) = (0, Vec::new());
     for line in GET_INFO.lines().filter(|l| !l.trim().is_empty()) {
-        let rec = json_mini::parse(line).expect("golden line is JSON");
-        if rec.get("dataset_frame").and_then(|v| v.i64()) != Some(1) {
+        let rec = json::parse(line).expect("golden line is JSON");
+        if rec.get("dataset_frame").and_then(|v| v.as_i64()) != Some(1) {
             continue;
         }
-        let algo = rec.get("algo").and_then(|v| v.str()).expect("algo");
-        let threshold = rec.get("threshold").and_then(|v| v.f64());
-        let feature = rec.get("feature").and_then(|v| v.i64()).expect("feature") as usize;
-        let stdout = rec.get("stdout").and_then(|v| v.str()).expect("stdout");
+        let algo = rec.get("algo").and_then(|v| v.as_str()).expect("algo");
+        let threshold = rec.get("threshold").and_then(|v| v.as_f64());
+        let feature = rec.get("feature").and_then(|v| v.as_i64()).expect("feature") as usize;
+        let stdout = rec.get("stdout").and_then(|v| v.as_str()).expect("stdout");
         let want = stdout.lines().find_map(|l| l.strip_prefix("ret value: ")).expect("golden has a ret value line");
         let s = Strategy::parse(algo, threshold).expect("golden strategy is valid");
         let m = match_feature(&s, &prev, &cur, feature).expect("golden feature is in range");

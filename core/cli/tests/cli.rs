@@ -5,8 +5,7 @@
 
 #[path = "../../tests/golden_data/mod.rs"]
 mod golden_data;
-#[path = "../../tests/json_mini/mod.rs"]
-mod json_mini;
+use siftlab_core::json;
 
 use golden_data::{golden_frames, golden_lanes, golden_params, golden_sets, kitti, primary_set};
 
@@ -114,29 +113,31 @@ fn get_info_prints_exactly_what_the_lab_prints() {
     let (mut n, mut identical) = (0, 0);
     let mut failures = Vec::new();
     for (lineno, line) in text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty()) {
-        let rec = json_mini::parse(line).unwrap_or_else(|e| panic!("line {}: {e}", lineno + 1));
-        let no_threshold = rec.get("threshold") == Some(&json_mini::Json::Null);
+        let rec = json::parse(line).unwrap_or_else(|e| panic!("line {}: {e}", lineno + 1));
+        let no_threshold = rec.get("threshold") == Some(&json::Json::Null);
         if lineno % 12 != 0 && !no_threshold {
             continue;
         }
         let field = |k: &str| rec.get(k).unwrap_or_else(|| panic!("line {}: no {k:?}", lineno + 1));
-        let algo = field("algo").str().expect("algo is a string").to_owned();
+        let algo = field("algo").as_str().expect("algo is a string").to_owned();
         let mut argv: Vec<String> = vec!["-d".into(), set.dataset.clone(), "get_info".into()];
         argv.extend(golden_lanes_args());
         argv.extend(["-a".into(), algo.clone()]);
         let threshold = match field("threshold") {
-            json_mini::Json::Null => None,
-            // The number's JSON text is Python's repr of the float the lab parsed.
-            json_mini::Json::Num(t) => {
-                argv.extend(["-t".into(), t.clone()]);
-                Some(t.parse::<f64>().unwrap())
+            json::Json::Null => None,
+            // The number's JSON text is Python's repr of the float the lab
+            // parsed; `py_float` writes the same text back.
+            t @ (json::Json::Float(_) | json::Json::Int(_)) => {
+                let t = t.as_f64().unwrap();
+                argv.extend(["-t".into(), siftlab_core::pyfmt::py_float(t)]);
+                Some(t)
             }
             other => panic!("line {}: bad threshold {other:?}", lineno + 1),
         };
-        let frame = field("dataset_frame").i64().expect("dataset_frame") as usize;
-        let feature = field("feature").i64().expect("feature") as usize;
+        let frame = field("dataset_frame").as_i64().expect("dataset_frame") as usize;
+        let feature = field("feature").as_i64().expect("feature") as usize;
         argv.extend([frame.to_string(), feature.to_string()]);
-        let golden = field("stdout").str().expect("stdout is a string");
+        let golden = field("stdout").as_str().expect("stdout is a string");
 
         let (prev, cur) = (library_features(frame - 1), library_features(frame));
         let s = Strategy::parse(&algo, threshold).unwrap();
@@ -181,26 +182,26 @@ fn sift_json_round_trips_opencv_values_bit_exactly() {
         let lanes = set.lanes.to_string();
         let o = siftlab(&["--opencv-lanes", &lanes, "sift", frame.to_str().unwrap(), "--json"]);
         assert!(o.status.success(), "sift --json failed: {}", stderr(&o));
-        let doc = json_mini::parse(stdout(&o).trim()).expect("sift --json is not valid JSON");
+        let doc = json::parse(stdout(&o).trim()).expect("sift --json is not valid JSON");
         let golden = set.read("noipp", WIDTH_FRAME);
         let id = format!("{} {WIDTH_FRAME}", set.name);
-        assert_eq!(doc.get("width").and_then(|v| v.i64()), Some(golden.width as i64));
-        assert_eq!(doc.get("height").and_then(|v| v.i64()), Some(golden.height as i64));
-        let kps = doc.get("keypoints").and_then(|v| v.arr()).expect("keypoints array");
-        let descs = doc.get("descriptors").and_then(|v| v.arr()).expect("descriptors array");
+        assert_eq!(doc.get("width").and_then(|v| v.as_i64()), Some(golden.width as i64));
+        assert_eq!(doc.get("height").and_then(|v| v.as_i64()), Some(golden.height as i64));
+        let kps = doc.get("keypoints").and_then(|v| v.as_arr()).expect("keypoints array");
+        let descs = doc.get("descriptors").and_then(|v| v.as_arr()).expect("descriptors array");
         let n = golden.keypoints.len();
         assert_eq!((kps.len(), descs.len()), (n, n), "{id}: keypoint/descriptor counts");
         for (i, (kp, want)) in kps.iter().zip(&golden.keypoints).enumerate() {
             let fields =
                 [("x", want.x), ("y", want.y), ("size", want.size), ("angle", want.angle), ("response", want.response)];
             for (key, want) in fields {
-                let got = kp.get(key).and_then(|v| v.f32()).unwrap_or_else(|| panic!("kp {i} {key}"));
+                let got = kp.get(key).and_then(|v| v.as_f32()).unwrap_or_else(|| panic!("kp {i} {key}"));
                 assert_eq!(got.to_bits(), want.to_bits(), "{id} kp {i} {key}: {got:?} vs OpenCV {want:?}");
             }
-            assert_eq!(kp.get("octave").and_then(|v| v.i64()), Some(want.octave as i64), "{id} kp {i} octave");
+            assert_eq!(kp.get("octave").and_then(|v| v.as_i64()), Some(want.octave as i64), "{id} kp {i} octave");
         }
         for (i, (d, want)) in descs.iter().zip(&golden.descriptors).enumerate() {
-            let got: Vec<i64> = d.arr().expect("descriptor row").iter().map(|v| v.i64().unwrap()).collect();
+            let got: Vec<i64> = d.as_arr().expect("descriptor row").iter().map(|v| v.as_i64().unwrap()).collect();
             let want: Vec<i64> = want.iter().map(|&b| b as i64).collect();
             assert_eq!(got, want, "{id} descriptor {i} at {lanes} lanes");
         }
@@ -377,8 +378,8 @@ fn tiny_images_give_zero_keypoints_not_a_crash() {
         assert!(stdout(&o).starts_with("0 keypoints in "), "sift {w}x{h}: {}", stdout(&o));
         let o = siftlab(&["sift", p.to_str().unwrap(), "--json"]);
         assert!(o.status.success(), "sift --json {w}x{h}: {}", stderr(&o));
-        let doc = json_mini::parse(stdout(&o).trim()).expect("valid JSON");
-        assert_eq!(doc.get("keypoints").and_then(|v| v.arr()).map(|a| a.len()), Some(0));
+        let doc = json::parse(stdout(&o).trim()).expect("valid JSON");
+        assert_eq!(doc.get("keypoints").and_then(|v| v.as_arr()).map(|a| a.len()), Some(0));
     }
     // get_info on tiny frames: SIFT finds nothing, so feature 0 does not exist.
     let tiny = png(8, 8, |x, y| ((x * 37 + y * 91) % 256) as u8);

@@ -13,10 +13,9 @@
 
 #![cfg(not(target_arch = "wasm32"))]
 
-#[path = "../../tests/json_mini/mod.rs"]
-mod json_mini;
+use siftlab_core::json;
 
-use json_mini::Json;
+use json::Json;
 use siftlab_core::sift::{detect_and_compute, SiftParams};
 use siftlab_core::GrayImage;
 use siftlab_mark::{knn_answer, plan, unbase64, Case, Pair, MAX_SOURCE_BYTES};
@@ -90,22 +89,22 @@ fn stderr(o: &Output) -> String {
 
 /// The `--json` report.
 fn report(o: &Output) -> Json {
-    json_mini::parse(&stdout(o)).unwrap_or_else(|e| panic!("not JSON ({e}):\n{}\n{}", stdout(o), stderr(o)))
+    json::parse(&stdout(o)).unwrap_or_else(|e| panic!("not JSON ({e}):\n{}\n{}", stdout(o), stderr(o)))
 }
 
 fn num(v: &Json, key: &str) -> f64 {
-    v.get(key).and_then(Json::f64).unwrap_or_else(|| panic!("no number {key}"))
+    v.get(key).and_then(Json::as_f64).unwrap_or_else(|| panic!("no number {key}"))
 }
 
 /// (task, status, diagnosis) of each failed case, in order.
 fn failures(r: &Json) -> Vec<(String, String, String)> {
     r.get("cases")
-        .and_then(Json::arr)
+        .and_then(Json::as_arr)
         .unwrap()
         .iter()
-        .filter(|c| c.get("status").and_then(Json::str) != Some("correct"))
+        .filter(|c| c.get("status").and_then(Json::as_str) != Some("correct"))
         .map(|c| {
-            let s = |k: &str| c.get(k).and_then(Json::str).unwrap_or("").to_string();
+            let s = |k: &str| c.get(k).and_then(Json::as_str).unwrap_or("").to_string();
             (s("task"), s("status"), s("diagnosis"))
         })
         .collect()
@@ -114,10 +113,12 @@ fn failures(r: &Json) -> Vec<(String, String, String)> {
 /// Per task: (correct, errors, marks).
 fn table(r: &Json) -> Vec<(i64, i64, f64)> {
     r.get("tasks")
-        .and_then(Json::arr)
+        .and_then(Json::as_arr)
         .unwrap()
         .iter()
-        .map(|t| (t.get("correct").unwrap().i64().unwrap(), t.get("errors").unwrap().i64().unwrap(), num(t, "marks")))
+        .map(|t| {
+            (t.get("correct").unwrap().as_i64().unwrap(), t.get("errors").unwrap().as_i64().unwrap(), num(t, "marks"))
+        })
         .collect()
 }
 
@@ -141,15 +142,15 @@ fn good_solution_scores_20() {
     let r = check_variant("good", 20.0, [(3, 0, 5.0); 4], &[]);
     assert_eq!(r.get("full_marks"), Some(&Json::Bool(true)));
     // The report lists the planned cases: the reference marker reruns them.
-    let cases = r.get("cases").and_then(Json::arr).unwrap();
+    let cases = r.get("cases").and_then(Json::as_arr).unwrap();
     let planned = plan(92, 3, &[1, 2, 3]);
     assert_eq!(cases.len(), planned.len());
     for (c, p) in cases.iter().zip(&planned) {
-        assert_eq!(c.get("frame").and_then(Json::i64), Some(p.frame() as i64));
-        assert_eq!(c.get("threshold").and_then(Json::f64), p.strategy().threshold());
+        assert_eq!(c.get("frame").and_then(Json::as_i64), Some(p.frame() as i64));
+        assert_eq!(c.get("threshold").and_then(Json::as_f64), p.strategy().threshold());
         if let Case::Info { strategy, feature, .. } = p {
-            assert_eq!(c.get("strategy").and_then(Json::str), Some(strategy.name()));
-            assert_eq!(c.get("feature").and_then(Json::i64), Some(*feature as i64));
+            assert_eq!(c.get("strategy").and_then(Json::as_str), Some(strategy.name()));
+            assert_eq!(c.get("feature").and_then(Json::as_i64), Some(*feature as i64));
         }
     }
     // The text report: the score and the table.
@@ -209,7 +210,7 @@ fn empty_case() {
         [(3, 0, 5.0), (3, 0, 5.0), (3, 0, 5.0), (1, 2, 1.5)],
         &[("matching_info", "error", "empty_case"); 2],
     );
-    let text = r.get("cases").and_then(Json::arr).unwrap().iter().find_map(|c| c.get("diagnosis_text")?.str());
+    let text = r.get("cases").and_then(Json::as_arr).unwrap().iter().find_map(|c| c.get("diagnosis_text")?.as_str());
     assert!(text.unwrap().contains("((0, 0), [], [])"));
 }
 
@@ -221,8 +222,8 @@ fn nn_raises_on_none() {
         [(3, 0, 5.0), (0, 3, 0.0), (3, 0, 5.0), (3, 0, 5.0)],
         &[("nn", "error", "runtime_error"); 3],
     );
-    let cases = r.get("cases").and_then(Json::arr).unwrap();
-    let text = cases.iter().find_map(|c| c.get("diagnosis_text")?.str()).unwrap();
+    let cases = r.get("cases").and_then(Json::as_arr).unwrap();
+    let text = cases.iter().find_map(|c| c.get("diagnosis_text")?.as_str()).unwrap();
     assert!(text.contains("TypeError") && text.contains("line 26") && text.contains("threshold None"), "{text}");
 }
 
@@ -263,9 +264,9 @@ fn assert_zero(o: &Output, code: &str, words: &[&str]) {
     for w in words {
         assert!(err.contains(w), "{code}: stderr lacks {w:?}: {err}");
     }
-    let r = json_mini::parse(&out).unwrap_or_else(|e| panic!("{code}: not JSON ({e}): {out}"));
+    let r = json::parse(&out).unwrap_or_else(|e| panic!("{code}: not JSON ({e}): {out}"));
     assert_eq!(num(&r, "total"), 0.0);
-    assert_eq!(r.get("rejection").and_then(|j| j.get("code")).and_then(Json::str), Some(code), "{out}");
+    assert_eq!(r.get("rejection").and_then(|j| j.get("code")).and_then(Json::as_str), Some(code), "{out}");
 }
 
 #[test]
@@ -273,7 +274,7 @@ fn files_that_score_zero() {
     let o = mark(&fixture("nonascii"), &["--json"]);
     assert_zero(&o, "not_ascii", &["line 15, column 12", "'é' (U+00E9)", "printable ASCII"]);
     let r = report(&o);
-    assert_eq!(r.get("rejection").and_then(|j| j.get("line")).and_then(Json::i64), Some(15));
+    assert_eq!(r.get("rejection").and_then(|j| j.get("line")).and_then(Json::as_i64), Some(15));
     assert_zero(&mark(&fixture("syntax"), &["--json"]), "syntax", &["SyntaxError", "line 32"]);
     assert_zero(&mark(&fixture("imports"), &["--json"]), "import", &["scipy"]);
     assert_zero(&mark(&scratch_file("empty-file", b""), &["--json"]), "empty", &["empty"]);
@@ -317,7 +318,7 @@ fn endless_loop_is_stopped_at_10_s() {
     let what = format!("{}\n{}", stdout(&o), stderr(&o));
     assert_eq!(table(&r), vec![(1, 0, 5.0), (1, 0, 5.0), (0, 1, 0.0), (1, 0, 5.0)], "{what}");
     assert_eq!(failures(&r), vec![("nndr".into(), "error".into(), "timeout".into())], "{what}");
-    let nndr = &r.get("cases").and_then(Json::arr).unwrap()[2];
+    let nndr = &r.get("cases").and_then(Json::as_arr).unwrap()[2];
     let secs = num(nndr, "seconds");
     assert!((10.0..11.0).contains(&secs), "the call ran {secs} s: {what}");
     assert!(took < Duration::from_secs(40), "marking took {took:?}");
@@ -340,17 +341,18 @@ fn knn_answers_equal_opencv() {
     goldens.sort();
     assert!(!goldens.is_empty(), "no knn_*.json golden in {}", dir.display());
     for path in goldens {
-        let g = json_mini::parse(&fs::read_to_string(&path).unwrap()).unwrap();
-        let frames: Vec<i64> = g.get("frames").and_then(Json::arr).unwrap().iter().map(|f| f.i64().unwrap()).collect();
-        let lanes = g.get("lanes").and_then(Json::i64).unwrap() as usize;
+        let g = json::parse(&fs::read_to_string(&path).unwrap()).unwrap();
+        let frames: Vec<i64> =
+            g.get("frames").and_then(Json::as_arr).unwrap().iter().map(|f| f.as_i64().unwrap()).collect();
+        let lanes = g.get("lanes").and_then(Json::as_i64).unwrap() as usize;
         let params = SiftParams { opencv_lanes: lanes, ..SiftParams::default() };
         let sift = |i: i64| {
             let bytes = fs::read(frame_file(&repo_root().join("www/demo/MyKITTI"), i as usize)).unwrap();
             detect_and_compute(&GrayImage::decode(&bytes).unwrap(), &params)
         };
         let pair = Pair { id: frames[1] as u32, prev: sift(frames[0]), cur: sift(frames[1]) };
-        assert_eq!(pair.prev.descriptors.len() as i64, g.get("nq").and_then(Json::i64).unwrap());
-        assert_eq!(pair.cur.descriptors.len() as i64, g.get("nt").and_then(Json::i64).unwrap());
+        assert_eq!(pair.prev.descriptors.len() as i64, g.get("nq").and_then(Json::as_i64).unwrap());
+        assert_eq!(pair.cur.descriptors.len() as i64, g.get("nt").and_then(Json::as_i64).unwrap());
         let id = pair.id;
         let pairs = [pair];
         let b64 = |row: &[u8; 128]| siftlab_mark::base64(row);
@@ -364,20 +366,20 @@ fn knn_answers_equal_opencv() {
             rows(&knn_answer(&req, &pairs)).remove(0)
         };
         let want = |v: &Json| -> Vec<(i64, f32)> {
-            v.arr()
+            v.as_arr()
                 .unwrap()
                 .iter()
-                .map(|m| (m.arr().unwrap()[0].i64().unwrap(), m.arr().unwrap()[1].f32().unwrap()))
+                .map(|m| (m.as_arr().unwrap()[0].as_i64().unwrap(), m.as_arr().unwrap()[1].as_f32().unwrap()))
                 .collect()
         };
-        let queries = g.get("queries").and_then(Json::arr).unwrap();
+        let queries = g.get("queries").and_then(Json::as_arr).unwrap();
         for c in queries {
-            let q = c.get("q").and_then(Json::i64).unwrap() as usize;
-            let why = c.get("why").and_then(Json::str).unwrap_or("");
+            let q = c.get("q").and_then(Json::as_i64).unwrap() as usize;
+            let why = c.get("why").and_then(Json::as_str).unwrap_or("");
             assert_eq!(answer(q, 2), want(c.get("k2").unwrap()), "{}: query {q} ({why}) k=2", path.display());
             assert_eq!(answer(q, 5), want(c.get("k5").unwrap()), "{}: query {q} ({why}) k=5", path.display());
             if let Some(kx) = c.get("kx") {
-                let k = kx.get("k").and_then(Json::i64).unwrap();
+                let k = kx.get("k").and_then(Json::as_i64).unwrap();
                 assert_eq!(
                     answer(q, k),
                     want(kx.get("matches").unwrap()),
@@ -386,15 +388,15 @@ fn knn_answers_equal_opencv() {
                 );
             }
         }
-        for c in g.get("full").and_then(Json::arr).unwrap() {
-            let q = c.get("q").and_then(Json::i64).unwrap() as usize;
-            let k = c.get("k").and_then(Json::i64).unwrap();
+        for c in g.get("full").and_then(Json::as_arr).unwrap() {
+            let q = c.get("q").and_then(Json::as_i64).unwrap() as usize;
+            let k = c.get("k").and_then(Json::as_i64).unwrap();
             assert_eq!(answer(q, k), want(c.get("matches").unwrap()), "{}: query {q} k={k}", path.display());
         }
         // By reference: every query at k = 2 in one request, the same rows.
         let all = rows(&knn_answer(&format!(r#"{{"op":"knn","qid":"{id}/1","tid":"{id}/2","k":2}}"#), &pairs));
         for c in queries {
-            let q = c.get("q").and_then(Json::i64).unwrap() as usize;
+            let q = c.get("q").and_then(Json::as_i64).unwrap() as usize;
             assert_eq!(all[q], want(c.get("k2").unwrap()), "{}: query {q} by reference", path.display());
         }
     }
@@ -402,23 +404,23 @@ fn knn_answers_equal_opencv() {
 
 /// A knn answer as (trainIdx, distance) rows, from the compact or the list form.
 fn rows(answer: &str) -> Vec<Vec<(i64, f32)>> {
-    let v = json_mini::parse(answer).unwrap_or_else(|e| panic!("{e}: {answer}"));
+    let v = json::parse(answer).unwrap_or_else(|e| panic!("{e}: {answer}"));
     if let Some(m) = v.get("matches") {
         return m
-            .arr()
+            .as_arr()
             .unwrap()
             .iter()
             .map(|r| {
-                r.arr()
+                r.as_arr()
                     .unwrap()
                     .iter()
-                    .map(|m| (m.arr().unwrap()[0].i64().unwrap(), m.arr().unwrap()[1].f32().unwrap()))
+                    .map(|m| (m.as_arr().unwrap()[0].as_i64().unwrap(), m.as_arr().unwrap()[1].as_f32().unwrap()))
                     .collect()
             })
             .collect();
     }
-    let kk = v.get("kk").and_then(Json::i64).unwrap_or_else(|| panic!("{answer}")) as usize;
-    let words = |k: &str| unbase64(v.get(k).and_then(Json::str).unwrap()).unwrap();
+    let kk = v.get("kk").and_then(Json::as_i64).unwrap_or_else(|| panic!("{answer}")) as usize;
+    let words = |k: &str| unbase64(v.get(k).and_then(Json::as_str).unwrap()).unwrap();
     let (t, d) = (words("t"), words("d"));
     let t: Vec<i64> = t.chunks(4).map(|b| i32::from_le_bytes(b.try_into().unwrap()) as i64).collect();
     let d: Vec<f32> = d.chunks(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();

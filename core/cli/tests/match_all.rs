@@ -8,11 +8,10 @@
 
 #[path = "../../tests/golden_data/mod.rs"]
 mod golden_data;
-#[path = "../../tests/json_mini/mod.rs"]
-mod json_mini;
+use siftlab_core::json;
 
 use golden_data::{kitti, repo_root};
-use json_mini::Json;
+use json::Json;
 use siftlab_core::dataset::parse_poses;
 use siftlab_core::matching::epipolar::{fundamental, judge, Verdicts};
 use siftlab_core::matching::sweep::sweep;
@@ -38,10 +37,10 @@ fn golden() -> Vec<Case> {
     let text = std::fs::read_to_string(repo_root().join("tests/fixtures/match_all.jsonl")).unwrap();
     text.lines()
         .map(|l| {
-            let j = json_mini::parse(l).unwrap();
-            let n = |k: &str| j.get(k).and_then(Json::i64).unwrap() as usize;
-            let t = j.get("threshold").and_then(Json::f64);
-            let strategy = Strategy::parse(j.get("strategy").and_then(Json::str).unwrap(), t).unwrap();
+            let j = json::parse(l).unwrap();
+            let n = |k: &str| j.get(k).and_then(Json::as_i64).unwrap() as usize;
+            let t = j.get("threshold").and_then(Json::as_f64);
+            let strategy = Strategy::parse(j.get("strategy").and_then(Json::as_str).unwrap(), t).unwrap();
             Case { frame: n("frame"), strategy, matches: n("matches"), correct: n("correct") }
         })
         .collect()
@@ -102,8 +101,8 @@ fn cli_match_all_prints_the_golden_counts_and_writes_matches_png() {
         want.matches, want.correct,
     );
     assert!(out.starts_with(&head), "{}", &out[..out.len().min(200)]);
-    let json = json_mini::parse(&out).unwrap();
-    assert_eq!(json.get("records").and_then(Json::arr).map(<[Json]>::len), Some(want.matches));
+    let json = json::parse(&out).unwrap();
+    assert_eq!(json.get("records").and_then(Json::as_arr).map(<[Json]>::len), Some(want.matches));
     // The text output is what it was.
     let text = siftlab(&dir, &[&args[..], &["120"]].concat());
     assert_eq!(
@@ -145,26 +144,26 @@ fn cli_match_all_records_equal_opencv_and_numpy() {
     for (algo, t, file) in [("nndr", "0.8", "120-nndr-0.8.jsonl"), ("dt", "300", "120-dt-300.jsonl")] {
         let text = std::fs::read_to_string(repo_root().join("tests/fixtures/match_all_records").join(file)).unwrap();
         let mut lines = text.lines();
-        let head = json_mini::parse(lines.next().unwrap()).unwrap();
-        let want: Vec<Json> = lines.map(|l| json_mini::parse(l).unwrap()).collect();
-        assert_eq!(head.get("matches").and_then(Json::i64), Some(want.len() as i64), "{file}");
+        let head = json::parse(lines.next().unwrap()).unwrap();
+        let want: Vec<Json> = lines.map(|l| json::parse(l).unwrap()).collect();
+        assert_eq!(head.get("matches").and_then(Json::as_i64), Some(want.len() as i64), "{file}");
         let run = |dataset: &std::path::Path| {
             let args = ["--opencv-lanes", "8", "-d", dataset.to_str().unwrap(), "match_all", "-a", algo, "-t", t];
-            json_mini::parse(&siftlab(&dir, &[&args[..], &["--json", "120"]].concat())).unwrap()
+            json::parse(&siftlab(&dir, &[&args[..], &["--json", "120"]].concat())).unwrap()
         };
         let got = run(&d);
-        assert_eq!(got.get("correct").and_then(Json::i64), head.get("correct").and_then(Json::i64), "{file}");
-        let records = got.get("records").and_then(Json::arr).unwrap();
+        assert_eq!(got.get("correct").and_then(Json::as_i64), head.get("correct").and_then(Json::as_i64), "{file}");
+        let records = got.get("records").and_then(Json::as_arr).unwrap();
         assert_eq!(records.len(), want.len(), "{file}");
         let (mut worst, mut worst_px) = ((0.0f64, 0usize), 0.0f64);
         for (i, (g, w)) in records.iter().zip(&want).enumerate() {
-            let w = w.arr().unwrap();
+            let w = w.as_arr().unwrap();
             let at = format!("{file}, match {i}");
             assert_eq!(g.get("query"), Some(&w[0]), "{at}");
             assert_eq!(g.get("train"), Some(&w[1]), "{at}");
             // Python's repr of the widened f32, the same characters.
             assert_eq!(g.get("distance"), Some(&w[2]), "{at}");
-            let (s, r) = (g.get("sampson").and_then(Json::f64).unwrap(), w[3].f64().unwrap());
+            let (s, r) = (g.get("sampson").and_then(Json::as_f64).unwrap(), w[3].as_f64().unwrap());
             assert!((s - r).abs() <= 1e-9 * r.abs() + 1e-10, "{at}: sampson {s} vs numpy {r}");
             let gap = (s - r).abs() / r.abs();
             if gap > worst.0 {
@@ -182,10 +181,10 @@ fn cli_match_all_records_equal_opencv_and_numpy() {
         // Without poses: the same matches, nothing judged.
         let plain = run(&no_poses);
         assert_eq!(plain.get("correct"), Some(&Json::Null));
-        let unjudged = plain.get("records").and_then(Json::arr).unwrap();
+        let unjudged = plain.get("records").and_then(Json::as_arr).unwrap();
         assert_eq!(unjudged.len(), want.len());
         for (g, w) in unjudged.iter().zip(&want) {
-            let w = w.arr().unwrap();
+            let w = w.as_arr().unwrap();
             assert_eq!((g.get("query"), g.get("train"), g.get("distance")), (Some(&w[0]), Some(&w[1]), Some(&w[2])));
             assert_eq!((g.get("sampson"), g.get("correct")), (Some(&Json::Null), Some(&Json::Null)));
         }
@@ -244,14 +243,14 @@ fn cli_match_all_layouts_draw_the_librarys_pictures() {
 fn cli_anatomy_ends_at_sifts_keypoint_count() {
     let img = kitti().join("gray/00/image_0/000120.png");
     let root = repo_root();
-    let json = json_mini::parse(&siftlab(&root, &["anatomy", img.to_str().unwrap(), "--json"])).unwrap();
-    let stages = json.get("stages").and_then(Json::arr).unwrap();
-    let names: Vec<&str> = stages.iter().map(|s| s.get("stage").and_then(Json::str).unwrap()).collect();
+    let json = json::parse(&siftlab(&root, &["anatomy", img.to_str().unwrap(), "--json"])).unwrap();
+    let stages = json.get("stages").and_then(Json::as_arr).unwrap();
+    let names: Vec<&str> = stages.iter().map(|s| s.get("stage").and_then(Json::as_str).unwrap()).collect();
     assert_eq!(names, ["extrema", "refined", "oriented", "deduplicated", "kept"]);
-    let sift = json_mini::parse(&siftlab(&root, &["sift", img.to_str().unwrap(), "--json"])).unwrap();
-    let n = sift.get("keypoints").and_then(Json::arr).unwrap().len() as i64;
-    assert_eq!(stages[4].get("count").and_then(Json::i64), Some(n));
-    assert_eq!(json.get("octaves").and_then(Json::i64), Some(9));
+    let sift = json::parse(&siftlab(&root, &["sift", img.to_str().unwrap(), "--json"])).unwrap();
+    let n = sift.get("keypoints").and_then(Json::as_arr).unwrap().len() as i64;
+    assert_eq!(stages[4].get("count").and_then(Json::as_i64), Some(n));
+    assert_eq!(json.get("octaves").and_then(Json::as_i64), Some(9));
 }
 
 /// The trade-off on the bundled pairs: where the three curves cross, and

@@ -5,13 +5,13 @@
 
 use crate::cases::Case;
 use crate::escape::escaped;
-use crate::json::Json;
 use crate::protocol::{ErrorKind, Reply};
 use crate::pyvalue::{info_type_problem, info_value, PyValue};
 use crate::reference::{
     difference_at, expected_text, first_difference, got_lists_text, info_equal, info_json, matches_equal,
     returned_matches, shorten, Expected, Got,
 };
+use siftlab_core::json::Json;
 use siftlab_core::matching::{knn_match, match_all, matching_info, DMatch, MatchInfo, Mistake, Strategy};
 use siftlab_core::pyfmt::{py_f32, py_float};
 use siftlab_core::sift::Features;
@@ -589,8 +589,8 @@ fn diagnose_info(matches: &[DMatch], info: &MatchInfo, got: &Json, prev: &Featur
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::json::parse;
     use crate::reference::reference;
+    use siftlab_core::json::parse;
     use siftlab_core::sift::KeyPoint;
 
     /// A pair whose distances take few values (ties and thresholds hit exactly).

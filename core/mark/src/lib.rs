@@ -22,7 +22,6 @@ mod b64;
 mod cases;
 mod diagnose;
 mod escape;
-mod json;
 mod protocol;
 mod pyvalue;
 mod reference;
@@ -34,7 +33,6 @@ pub use b64::{base64, unbase64};
 pub use cases::{plan, threshold_text, Case, Task, DEFAULT_CASES, NUM_FEATURES};
 pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Status};
 pub use escape::{escaped, is_clean};
-pub use json::{parse as parse_json, Json};
 pub use protocol::{
     call_message, knn_answer, load_message, pair_message, parse_line, parse_reply, with_id, ErrorKind, HarnessLine,
     Pair, Reply, MAX_LINE_BYTES, MAX_MESSAGE_CHARS,
@@ -43,6 +41,7 @@ pub use pyvalue::{info_type_problem, info_value, PyValue};
 pub use reference::{reference, Expected};
 pub use report::{report_json, report_text, Marks, TaskMarks};
 pub use session::{Limits, Outcome, Pairs, Session, Step};
+pub use siftlab_core::json::{parse as parse_json, Json};
 pub use source::{check_source, Rejection, MAX_SOURCE_BYTES};
 
 /// The Python side of the marking, as files: the harness and the two shims

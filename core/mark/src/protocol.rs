@@ -4,8 +4,8 @@
 
 use crate::b64::{base64, unbase64};
 use crate::cases::Case;
-use crate::json::{parse, push_str, quote, Json};
 use crate::reference::Expected;
+use siftlab_core::json::{parse, push_str, quote, Json};
 use siftlab_core::matching::knn_match;
 use siftlab_core::pyfmt::py_f32;
 use siftlab_core::sift::{Features, KeyPoint};

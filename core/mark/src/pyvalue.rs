@@ -11,7 +11,7 @@
 //! else: never equal); any tagged value may carry `"sub": CLASS` (an
 //! instance of a subclass, encoded as its base value).
 
-use crate::json::Json;
+use siftlab_core::json::Json;
 use siftlab_core::matching::MatchInfo;
 use siftlab_core::pyfmt::py_float;
 
@@ -305,7 +305,7 @@ pub fn info_type_problem(v: &PyValue) -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::json::parse;
+    use siftlab_core::json::parse;
 
     fn v(text: &str) -> PyValue {
         PyValue::from_json(&parse(text).unwrap())

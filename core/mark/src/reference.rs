@@ -3,8 +3,8 @@
 
 use crate::b64::unbase64;
 use crate::cases::{Case, NUM_FEATURES};
-use crate::json::Json;
 use siftlab_core::error::{Error, Result};
+use siftlab_core::json::Json;
 use siftlab_core::matching::{match_all, match_feature, matching_info, DMatch, MatchInfo};
 use siftlab_core::pyfmt::{py_f32, py_float};
 use siftlab_core::sift::Features;
@@ -257,7 +257,7 @@ pub fn got_lists_text(got: &[Vec<Got>], at: Option<(usize, usize)>) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::json::parse;
+    use siftlab_core::json::parse;
     use siftlab_core::matching::Strategy;
     use siftlab_core::sift::KeyPoint;
 

@@ -4,8 +4,8 @@
 
 use crate::cases::{threshold_text, Case, Task};
 use crate::diagnose::{CaseResult, Status};
-use crate::json::{push_f64, push_str};
 use crate::source::Rejection;
+use siftlab_core::json::{push_f64, push_str};
 use std::fmt::Write as _;
 
 /// One task's row of the table.
@@ -203,7 +203,7 @@ pub fn report_json(m: &Marks) -> String {
 mod tests {
     use super::*;
     use crate::diagnose::Diagnosis;
-    use crate::json::parse;
+    use siftlab_core::json::parse;
     use siftlab_core::matching::Strategy;
 
     fn r(case: Case, status: Status) -> CaseResult {
@@ -249,9 +249,9 @@ mod tests {
         assert_eq!(cases.len(), 16);
         assert_eq!(cases[6].get("index").unwrap().as_i64(), Some(2));
         assert_eq!(cases[6].get("diagnosis").unwrap().as_str(), Some("wrong_order"));
-        assert_eq!(cases[4].get("threshold"), Some(&crate::json::Json::Null));
+        assert_eq!(cases[4].get("threshold"), Some(&siftlab_core::json::Json::Null));
         assert_eq!(cases[12].get("strategy").unwrap().as_str(), Some("nndr"));
-        assert_eq!(cases[0].get("expected"), Some(&crate::json::Json::Null));
+        assert_eq!(cases[0].get("expected"), Some(&siftlab_core::json::Json::Null));
 
         let all: Vec<CaseResult> = [dt, nn, nndr, info].iter().map(|&c| r(c, Status::Correct)).collect();
         let m = Marks::new(3, 1, all);

@@ -43,8 +43,8 @@ pub fn parse_golden(bytes: &[u8], name: &str) -> Golden {
 /// The SIMD width OpenCV's SIFT kernels ran with where a golden set was
 /// written (`opencv_simd_lanes` in its meta.json; docs/fidelity.md §SIFT-13).
 pub fn meta_lanes(meta: &str, name: &str) -> usize {
-    let meta = crate::json_mini::parse(meta).expect("meta.json is JSON");
-    let lanes = meta.get("opencv_simd_lanes").and_then(|v| v.i64()).expect("meta.json: opencv_simd_lanes") as usize;
+    let meta = siftlab_core::json::parse(meta).expect("meta.json is JSON");
+    let lanes = meta.get("opencv_simd_lanes").and_then(|v| v.as_i64()).expect("meta.json: opencv_simd_lanes") as usize;
     assert!(matches!(lanes, 8 | 16), "{name}/meta.json: opencv_simd_lanes {lanes}");
     lanes
 }

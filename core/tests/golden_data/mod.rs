@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use siftlab_core::sift::SiftParams;
 
-use super::json_mini;
+use siftlab_core::json;
 
 mod format;
 pub use format::{meta_lanes, parse_golden, Golden};
@@ -34,8 +34,8 @@ impl GoldenSet {
         let path = fixtures().join(name).join("meta.json");
         let meta = fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
         let lanes = meta_lanes(&meta, name);
-        let meta = json_mini::parse(&meta).expect("meta.json is JSON");
-        let dataset = meta.get("dataset").and_then(|v| v.str()).expect("meta.json: dataset").to_owned();
+        let meta = json::parse(&meta).expect("meta.json is JSON");
+        let dataset = meta.get("dataset").and_then(|v| v.as_str()).expect("meta.json: dataset").to_owned();
         GoldenSet { name, lanes, dataset }
     }
 
