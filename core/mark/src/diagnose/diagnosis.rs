@@ -1,0 +1,158 @@
+//! Why a case failed: the kinds of mistake ([`Diagnosis`]), each with a
+//! stable code for the report and what to do, in words, for the student.
+
+use siftlab_core::matching::Mistake;
+
+/// Why a case failed.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Diagnosis {
+    /// One of the self-check's common mistakes (`matching::Mistake`).
+    Mistake(Mistake),
+    /// dt keeps at most k matches per query: `knnMatch(…, k)` with k < len(des2).
+    TruncatedK(usize),
+    /// nndr tested `d1 / d2 < t`, which rounds differently from `d1 < t * d2`.
+    RatioDivision,
+    /// nn with a threshold kept every nearest neighbour.
+    NnIgnoresThreshold,
+    /// nn with `None` kept no match.
+    NnNoneKeepsNothing,
+    /// The lists of queries without a match left out.
+    DroppedEmptyLists,
+    /// Another number of lists than query descriptors.
+    Length { expected: usize, got: usize },
+    /// The same matches, distances the float64 L2 distance, not the float32.
+    NotFloat32,
+    /// The same matches per query in another order.
+    Order,
+    /// matching_info: coordinates rounded, not truncated.
+    Rounded,
+    /// matching_info: coordinates left as floats.
+    FloatCoordinates,
+    /// matching_info: (y, x) instead of (x, y).
+    SwappedXY,
+    /// matching_info on an empty list: not `((0, 0), [], [])` (with the
+    /// exception's message if it raised one).
+    EmptyCase(Option<String>),
+    /// matching_info's value is not `((x, y), [(x, y), …], [d, …])`.
+    InfoShape(String),
+    /// matching_info's numbers are right but Python's `==` tells the value
+    /// from the lab's tuple (lists for points, numpy arrays, …).
+    InfoTypes,
+    /// A wrong return type or shape (the harness's message).
+    WrongType(String),
+    /// An exception, with a hint when the case explains it.
+    Runtime { message: String, hint: Option<&'static str> },
+    /// Over the per-call limit; the process was stopped.
+    Timeout { seconds: f64 },
+    /// Not run: the task's time was used up.
+    TaskTimeLimit { seconds: f64 },
+    /// The Python process ended during the call.
+    Crashed(String),
+    /// None of the above: where the value first differs.
+    Differs(String),
+}
+
+impl Diagnosis {
+    /// A stable name for the JSON report and tests.
+    pub fn code(&self) -> &'static str {
+        match self {
+            Diagnosis::Mistake(Mistake::LessOrEqual) => "less_or_equal",
+            Diagnosis::Mistake(Mistake::TruncatedK100) => "k_too_small",
+            Diagnosis::Mistake(Mistake::RatioInverted) => "ratio_inverted",
+            Diagnosis::Mistake(Mistake::NnMoreThanOne) => "nn_more_than_one",
+            Diagnosis::Mistake(Mistake::WrongFrameOrder) => "frames_swapped",
+            Diagnosis::TruncatedK(_) => "k_too_small",
+            Diagnosis::RatioDivision => "ratio_division",
+            Diagnosis::NnIgnoresThreshold => "nn_ignores_threshold",
+            Diagnosis::NnNoneKeepsNothing => "nn_ignores_none",
+            Diagnosis::DroppedEmptyLists => "empty_lists_dropped",
+            Diagnosis::Length { .. } => "wrong_length",
+            Diagnosis::NotFloat32 => "not_float32",
+            Diagnosis::Order => "wrong_order",
+            Diagnosis::Rounded => "rounded",
+            Diagnosis::FloatCoordinates => "float_coordinates",
+            Diagnosis::SwappedXY => "swapped_xy",
+            Diagnosis::EmptyCase(_) => "empty_case",
+            Diagnosis::InfoShape(_) => "wrong_shape",
+            Diagnosis::InfoTypes => "wrong_types_inside",
+            Diagnosis::WrongType(_) => "wrong_type",
+            Diagnosis::Runtime { .. } => "runtime_error",
+            Diagnosis::Timeout { .. } => "timeout",
+            Diagnosis::TaskTimeLimit { .. } => "task_time_limit",
+            Diagnosis::Crashed(_) => "crashed",
+            Diagnosis::Differs(_) => "differs",
+        }
+    }
+
+    /// What went wrong and what to do, for the student.
+    pub fn describe(&self) -> String {
+        match self {
+            Diagnosis::Mistake(Mistake::WrongFrameOrder) => {
+                "des1 and des2 (or kp1 and kp2) are swapped: des1, the previous frame (FRAME_ID-1), is the query: \
+                 knnMatch(des1, des2, k)"
+                    .into()
+            }
+            Diagnosis::Mistake(m) => m.describe().into(),
+            Diagnosis::TruncatedK(k) => format!(
+                "your dt keeps at most {k} matches per query: it asked knnMatch for k={k} neighbours; use \
+                 k=len(des2) so every match under the threshold is kept"
+            ),
+            Diagnosis::RatioDivision => "your nndr tests d1 / d2 < threshold; the lab tests d1 < threshold * d2, \
+                 which rounds differently in floating point (m.distance < t * n.distance)"
+                .into(),
+            Diagnosis::NnIgnoresThreshold => {
+                "your nn keeps every nearest neighbour: it ignores the threshold (keep it only if its distance < \
+                 threshold)"
+                    .into()
+            }
+            Diagnosis::NnNoneKeepsNothing => "with threshold None your nn keeps no match: None means no threshold, \
+                 so every query keeps its nearest neighbour"
+                .into(),
+            Diagnosis::DroppedEmptyLists => "the lists of queries without a match are left out: return one list per \
+                 query descriptor of des1, an empty list where it has no match"
+                .into(),
+            Diagnosis::Length { expected, got } => {
+                format!("returned {got} lists, expected {expected}: one list per query descriptor of des1")
+            }
+            Diagnosis::NotFloat32 => "the distances are float64 L2 distances, not the float32 ones DMatch holds: \
+                 return knnMatch's DMatch distances (OpenCV computes them in float32)"
+                .into(),
+            Diagnosis::Order => "the right matches in another order: each list is nearest first, equal distances \
+                 by lower trainIdx (knnMatch's order)"
+                .into(),
+            Diagnosis::Rounded => {
+                "coordinates are rounded; the lab truncates them: int(x), int(y) of KeyPoint.pt".into()
+            }
+            Diagnosis::FloatCoordinates => "coordinates are floats: truncate them with int(x), int(y)".into(),
+            Diagnosis::SwappedXY => "x and y are swapped: KeyPoint.pt is (x, y)".into(),
+            Diagnosis::EmptyCase(raised) => {
+                let mut s =
+                    "the empty case: for an empty list of matches matching_info returns ((0, 0), [], [])".to_string();
+                if let Some(m) = raised {
+                    s.push_str(&format!("; it raised {m}"));
+                }
+                s
+            }
+            Diagnosis::InfoShape(what) => {
+                format!("matching_info must return a tuple ((x, y), [(x, y), ...], [d, ...]): {what}")
+            }
+            Diagnosis::InfoTypes => "the numbers are right, but Python's == tells the value apart from the lab's \
+                 ((x, y), [(x, y), ...], [d, ...]): each point a tuple of two ints, the distances floats"
+                .into(),
+            Diagnosis::WrongType(m) => format!("wrong return type (counts as a runtime error): {m}"),
+            Diagnosis::Runtime { message, hint } => match hint {
+                Some(h) => format!("runtime error: {message} ({h})"),
+                None => format!("runtime error: {message}"),
+            },
+            Diagnosis::Timeout { seconds } => format!(
+                "the call ran over {seconds} s and was stopped (an endless loop, or far too slow); it counts as a \
+                 runtime error"
+            ),
+            Diagnosis::TaskTimeLimit { seconds } => {
+                format!("not run: the task's {seconds} s were used up by the calls before it")
+            }
+            Diagnosis::Crashed(m) => format!("the Python process ended during the call: {m}"),
+            Diagnosis::Differs(m) => m.clone(),
+        }
+    }
+}
