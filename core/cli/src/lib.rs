@@ -23,7 +23,7 @@ use clap::Parser;
 use common::{open_dataset, parse_threshold, sift_params, MatchContext};
 use siftlab_core::error::{Error, Result};
 use siftlab_core::image::GrayImage;
-use siftlab_core::matching::args::parse_index;
+use siftlab_core::matching::args::{check_feature_id, parse_frame_id, parse_index};
 use siftlab_core::matching::{match_feature, matching_info, MatchInfo, Strategy};
 use siftlab_core::pyfmt::{py_float, py_str};
 use siftlab_core::sift::{detect_and_compute, Features};
@@ -160,10 +160,7 @@ pub fn run(cli: &Cli) -> Result<()> {
 fn run_match(cli: &Cli, a: &MatchArgs, name: &str) -> Result<(MatchInfo, MatchContext)> {
     let threshold = parse_threshold(&a.threshold)?;
     let strategy = Strategy::parse(&a.algo, threshold)?;
-    let frame = parse_index(&a.frame_id, "FRAME_ID")?;
-    if frame < 1 {
-        return Err(Error::InvalidArgument("FRAME_ID must be >= 1: frames FRAME_ID-1 and FRAME_ID are matched".into()));
-    }
+    let frame = parse_frame_id(&a.frame_id)?;
     let feature = parse_index(&a.feature_id, "FEATURE_ID")?;
     let t_repr = threshold.map_or("None".to_string(), py_float);
     println!("vo params: ({}, {t_repr}, {})", py_str(&a.algo), py_str(&cli.dataset));
@@ -178,15 +175,8 @@ fn run_match(cli: &Cli, a: &MatchArgs, name: &str) -> Result<(MatchInfo, MatchCo
     let prev = detect_and_compute(&prev_image, &params);
     eprintln!("Processing frame {frame}");
     let cur = detect_and_compute(&cur_image, &params);
-    let matches = match_feature(&strategy, &prev, &cur, feature).map_err(|e| match e {
-        Error::InvalidArgument(m) if m.starts_with("feature id") => Error::InvalidArgument(format!(
-            "FEATURE_ID {feature} is out of range: frame {} has {} keypoints (valid: 0 to {})",
-            frame - 1,
-            prev.keypoints.len(),
-            prev.keypoints.len().saturating_sub(1)
-        )),
-        other => other,
-    })?;
+    check_feature_id(feature, prev.keypoints.len(), Some(frame - 1))?;
+    let matches = match_feature(&strategy, &prev, &cur, feature)?;
     let info = matching_info(&prev.keypoints, &cur.keypoints, &matches);
     Ok((info, MatchContext { prev_image, cur_image, prev, cur, feature, matches }))
 }

@@ -9,7 +9,7 @@
 use crate::args::{Cli, MatchAllArgs};
 use crate::common::{note_camera, open_dataset, parse_threshold, sift_params};
 use siftlab_core::error::{Error, Result};
-use siftlab_core::matching::args::parse_index;
+use siftlab_core::matching::args::parse_frame_id;
 use siftlab_core::matching::epipolar::{fundamental, sampsons, Verdicts};
 use siftlab_core::matching::{match_all, DMatch, Strategy};
 use siftlab_core::pyfmt::py_f32;
@@ -26,10 +26,7 @@ pub fn run(cli: &Cli, a: &MatchAllArgs) -> Result<()> {
             a.epipolar_px
         )));
     }
-    let frame = parse_index(&a.frame_id, "FRAME_ID")?;
-    if frame < 1 {
-        return Err(Error::InvalidArgument("FRAME_ID must be >= 1: frames FRAME_ID-1 and FRAME_ID are matched".into()));
-    }
+    let frame = parse_frame_id(&a.frame_id)?;
     let ds = open_dataset(cli)?;
     let params = sift_params(cli);
     let (prev_image, cur_image) = (ds.load_frame(frame - 1)?, ds.load_frame(frame)?);

@@ -13,11 +13,13 @@ pub mod args;
 pub mod epipolar;
 pub(crate) mod explain;
 pub(crate) mod info;
+pub(crate) mod kind;
 pub(crate) mod knn;
 pub(crate) mod strategy;
 pub mod sweep;
 
 pub use explain::{explain, mistaken_answers, Explanation, Mistake, Verdict};
 pub use info::{matching_info, py_int, MatchInfo};
+pub use kind::StrategyKind;
 pub use knn::{knn_match, DMatch};
-pub use strategy::{check_feature, match_all, match_feature, Strategy, StrategyKind};
+pub use strategy::{check_feature, match_all, match_feature, Strategy};

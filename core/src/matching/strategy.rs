@@ -1,6 +1,7 @@
 //! The lab's three matching strategies, with their argument checks.
 
 use super::distance::{distance_row, distance_rows, TrainSet};
+use super::kind::StrategyKind;
 use super::knn::{knn_row, DMatch};
 use crate::error::{Error, Result};
 use crate::sift::Features;
@@ -128,34 +129,6 @@ impl Strategy {
     }
 }
 
-/// A strategy without its threshold: what a menu, a link or an exercise picks
-/// before the threshold is known. Its names are the lab's `-a` values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub enum StrategyKind {
-    Dt,
-    Nn,
-    Nndr,
-}
-
-impl StrategyKind {
-    /// The three, in the lab's order.
-    pub const ALL: [StrategyKind; 3] = [StrategyKind::Dt, StrategyKind::Nn, StrategyKind::Nndr];
-
-    /// The lab's name (`-a`).
-    pub fn name(self) -> &'static str {
-        match self {
-            StrategyKind::Dt => "dt",
-            StrategyKind::Nn => "nn",
-            StrategyKind::Nndr => "nndr",
-        }
-    }
-
-    /// The kind named `name` (exactly `dt`, `nn` or `nndr`), if any.
-    pub fn parse(name: &str) -> Option<StrategyKind> {
-        StrategyKind::ALL.into_iter().find(|k| k.name() == name)
-    }
-}
-
 impl Strategy {
     /// The strategy's kind (its threshold dropped).
     pub fn kind(&self) -> StrategyKind {
@@ -167,20 +140,10 @@ impl Strategy {
     }
 }
 
-/// Checks a feature id against the query frame's keypoints.
+/// Checks a feature id against the query frame's keypoints
+/// ([`super::args::check_feature_id`], without a frame number).
 pub fn check_feature(feature: usize, prev: &Features) -> Result<()> {
-    let n = prev.keypoints.len();
-    if feature >= n {
-        return Err(Error::InvalidArgument(if n == 0 {
-            format!("feature id {feature} is out of range: the previous frame has no keypoints")
-        } else {
-            format!(
-                "feature id {feature} is out of range: the previous frame has {n} keypoints (valid ids: 0 to {})",
-                n - 1
-            )
-        }));
-    }
-    Ok(())
+    super::args::check_feature_id(feature, prev.keypoints.len(), None)
 }
 
 /// The matches of one feature of the previous frame (the query) in the

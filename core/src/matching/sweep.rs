@@ -10,8 +10,8 @@
 
 use super::distance::{distance_rows, TrainSet};
 use super::epipolar::{homogeneous, sampson_of, Verdicts};
+use super::kind::StrategyKind;
 use super::knn::knn_row;
-use super::strategy::StrategyKind;
 use crate::error::{Error, Result};
 use crate::sift::Features;
 use nalgebra::Matrix3;
