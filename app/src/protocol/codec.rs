@@ -19,7 +19,7 @@ pub(crate) fn get_u32(o: &JsValue, k: &str) -> Result<u32, String> {
 }
 
 // The checks below take plain Rust values, not `JsValue`s, so they build and
-// run natively: `fuzz/fuzz_targets/app_state.rs` and the host tests call them
+// run natively: `tests/fuzz/fuzz_targets/app_state.rs` and the host tests call them
 // (wasm-bindgen's imports panic off wasm32).
 
 /// A JS number as a u32 message field: a whole number in 0..=u32::MAX. An

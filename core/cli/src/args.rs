@@ -157,7 +157,7 @@ pub struct SiftArgs {
     #[arg(long)]
     pub json: bool,
     /// Time detect+compute this many times and report the best and the mean
-    /// (for benchmarks: tests/scripts/bench_interleaved.py).
+    /// (for benchmarks: tests/benchmarks/bench_interleaved.py).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub repeat: u32,
 }

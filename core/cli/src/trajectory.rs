@@ -45,7 +45,7 @@ pub struct Options<'a> {
 }
 
 /// The fields of [`StepResult`] a trace holds, in its order: what
-/// `tests/scripts/vo_reference.py --trace` and `vo_matched_reference.py
+/// `tests/references/vo_reference.py --trace` and `vo_matched_reference.py
 /// --trace` write for OpenCV's loops, so the files compare line by line.
 pub const TRACE_FIELDS: [&str; 6] =
     ["frame", "points_in", "tracked", "essential_inliers", "pose_inliers", "redetected"];
@@ -194,7 +194,7 @@ mod tests {
         let (text, m) = view_trajectory(&fixture(), &opts, &png, &mut |d, t| calls.push((d, t))).unwrap();
         assert_eq!((m.frames, m.kitti_t_err_pct), (3, None));
         assert_eq!(calls, vec![(1, 3), (2, 3), (3, 3)]);
-        // tests/scripts/vo_reference.py --dataset www/demo/MyKITTI --frames 3
+        // tests/references/vo_reference.py --dataset www/demo/MyKITTI --frames 3
         // (OpenCV 4.8.0.76): position after frame 2.
         let want = [-0.03253505574129042, -0.0229585009250804, 1.858783796014574];
         let lines: Vec<Vec<f64>> = std::fs::read_to_string(&poses)

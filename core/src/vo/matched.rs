@@ -221,7 +221,7 @@ mod tests {
     }
 
     /// tests/fixtures/vo_matched/NAME.txt: the OpenCV loop's positions
-    /// (tests/scripts/vo_matched_reference.py --fixtures: IPP off, 8 lanes).
+    /// (tests/references/vo_matched_reference.py --fixtures: IPP off, 8 lanes).
     fn reference(name: &str) -> Vec<[f64; 3]> {
         fixture(&format!("{name}.txt"))
             .lines()

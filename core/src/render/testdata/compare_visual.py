@@ -4,7 +4,7 @@
 For each case the lab's images are drawn by OpenCV in a fresh process (as the
 lab's run_odometry.py does: one drawMatchesKnn per process, so theRNG colours
 are the lab's), from the lab's own SIFT + BFMatcher strategies
-(tests/scripts/lab_reference.py); siftlab's come from the binary. Prints the
+(tests/references/lab_reference.py); siftlab's come from the binary. Prints the
 number of differing pixels per image.
 
   python3 compare_visual.py --siftlab target/release/siftlab -d DATASET \

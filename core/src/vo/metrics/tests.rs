@@ -77,7 +77,7 @@ fn pose_rows(path: &Path) -> Vec<PoseRow> {
     crate::dataset::parse_poses(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
-/// The numpy reference (tests/scripts/metrics_reference.py) on the four
+/// The numpy reference (tests/references/metrics_reference.py) on the four
 /// committed OpenCV trajectories of frames 0–150 and on a drifting copy of
 /// 300 true poses.
 #[test]

@@ -2,7 +2,7 @@
 # Two siftlab builds' outputs, byte for byte, on the bundled demo frames: what a
 # refactoring must leave unchanged.
 #
-#   tests/scripts/compare_base.sh OLD_BINARY NEW_BINARY [--dataset DIR] [--keep DIR]
+#   tests/benchmarks/compare_base.sh OLD_BINARY NEW_BINARY [--dataset DIR] [--keep DIR]
 #
 # Each build runs in a scratch folder of its own (the view commands write their PNGs
 # into the current folder) with the same absolute dataset path, so the printed paths
