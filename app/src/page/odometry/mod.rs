@@ -81,17 +81,7 @@ pub fn OdometryView() -> impl IntoView {
     let started_ms = StoredValue::new(0.0f64);
     // Frames 0, 1, 2, … with no gap: the demo's 119, 120, 149, 150 are not part of it.
     let available = move || lab.source.with(|s| run_from_zero(s.frames()));
-    // The default FRAME_ID follows the frames available (the demo's list
-    // arrives after the page draws) unless the user has typed one of their own.
-    let last_default = StoredValue::new(String::new());
-    Effect::new(move |_| {
-        let default = available().saturating_sub(1).to_string();
-        let typed = frame_text.with_untracked(|t| !t.is_empty() && *t != last_default.get_value());
-        last_default.set_value(default.clone());
-        if !typed {
-            frame_text.set(default);
-        }
-    });
+    Effect::new(move |_| frame_text.set(available().saturating_sub(1).to_string()));
 
     let run = move |_: ()| {
         let n = match vo_frame_count(&frame_text.get_untracked(), available()) {
