@@ -74,6 +74,18 @@ impl MatchedOdometry {
         })
     }
 
+    /// The loop as it stood after frame `frame` with that frame's features:
+    /// the next step gives frame `frame + 1`'s counts and [`StepDetail`] as the
+    /// original run did (a step depends only on the two frames' features). The
+    /// pose restarts at the identity.
+    pub fn resume(cam: Camera, strategy: Strategy, frame: usize, prev: Features, gt: Option<&PoseRow>) -> Result<Self> {
+        let mut m = MatchedOdometry::new(cam, strategy)?;
+        m.prev = Some(prev);
+        m.prev_gt = gt.copied();
+        m.frame = frame + 1;
+        Ok(m)
+    }
+
     pub fn strategy(&self) -> &Strategy {
         &self.strategy
     }
@@ -329,5 +341,36 @@ mod tests {
         let e = odo.step_features(f1, None).unwrap_err().to_string();
         assert!(e.contains("frame 2 needs the ground-truth poses"), "{e}");
         assert_eq!(odo.next_frame(), 2);
+    }
+
+    /// A frame's counts and matched points, recomputed from the previous
+    /// frame's features by [`MatchedOdometry::resume`], equal the run's.
+    #[test]
+    fn resumed_loop_replays_each_frame() {
+        let ds = dataset();
+        let feats: Vec<Features> =
+            (0..5).map(|i| detect_and_compute(&ds.load_frame(i).unwrap(), &SiftParams::for_host())).collect();
+        let mut odo = MatchedOdometry::new(Camera::default(), Strategy::Nndr(0.8)).unwrap();
+        odo.record_detail = true;
+        let run: Vec<StepResult> =
+            feats.iter().enumerate().map(|(i, f)| odo.step_features(f.clone(), ds.poses().get(i)).unwrap()).collect();
+        for i in 1..5 {
+            let mut replay = MatchedOdometry::resume(
+                Camera::default(),
+                Strategy::Nndr(0.8),
+                i - 1,
+                feats[i - 1].clone(),
+                ds.poses().get(i - 1),
+            )
+            .unwrap();
+            replay.record_detail = true;
+            let got = replay.step_features(feats[i].clone(), ds.poses().get(i)).unwrap();
+            assert!(got.detail.as_ref().is_some_and(|d| d.prev.len() > 500), "frame {i}");
+            assert_eq!(got.detail, run[i].detail, "frame {i}");
+            assert_eq!(
+                (got.frame, got.tracked, got.essential_inliers, got.pose_inliers),
+                (i, run[i].tracked, run[i].essential_inliers, run[i].pose_inliers)
+            );
+        }
     }
 }

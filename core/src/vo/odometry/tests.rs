@@ -168,3 +168,36 @@ fn pipelined_run_equals_stepping() {
         }
     }
 }
+
+/// A frame's counts and points, recomputed from the last frame the loop
+/// detected on (its image and points) by [`Odometry::resume`], equal the
+/// original run's: the page shows a long run's old frames that way.
+#[test]
+fn resumed_loop_replays_each_frame() {
+    let cam = Camera { fx: 300.0, fy: 300.0, cx: 160.0, cy: 120.0 };
+    let img = |k: usize| frame(320, 240, 1.0 + 0.035 * k as f64, &cam);
+    let poses: Vec<PoseRow> = (0..12).map(|k| gt(0.5 * k as f64)).collect();
+    let mut odo = Odometry::with_detector(cam, Box::new(grid)).unwrap();
+    // Re-detect only when a tenth of the grid is lost: chains of several frames.
+    odo.min_points = 390;
+    odo.record_detail = true;
+    let run: Vec<StepResult> = (0..12).map(|k| odo.step(&img(k), Some(&poses[k])).unwrap()).collect();
+    let redetected: Vec<usize> = (0..12).filter(|&k| run[k].redetected).collect();
+    assert!(redetected.len() >= 3 && redetected.windows(2).any(|w| w[1] - w[0] >= 3), "{redetected:?}");
+    for i in 1..12 {
+        let j = *redetected.iter().rev().find(|&&j| j < i).unwrap();
+        let refs = run[j].detail.as_ref().unwrap().detected.clone();
+        let mut replay = Odometry::resume(cam, Box::new(grid), j, &img(j), refs, Some(&poses[j])).unwrap();
+        replay.min_points = odo.min_points;
+        for k in j + 1..i {
+            replay.step(&img(k), Some(&poses[k])).unwrap();
+        }
+        replay.record_detail = true;
+        let got = replay.step(&img(i), Some(&poses[i])).unwrap();
+        let want = &run[i];
+        assert_eq!(got.detail, want.detail, "frame {i} from {j}");
+        let counts =
+            |r: &StepResult| (r.points_in, r.tracked, r.essential_inliers, r.pose_inliers, r.redetected, r.points_out);
+        assert_eq!(counts(&got), counts(want), "frame {i} from {j}");
+    }
+}

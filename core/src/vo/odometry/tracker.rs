@@ -75,6 +75,31 @@ impl Odometry {
         self.frame
     }
 
+    /// The loop as it stood after frame `frame`, a frame it (re-)detected on:
+    /// `img` is that frame and `refs` the points detected there. Stepping on
+    /// from here gives each later frame's counts and [`StepDetail`] exactly as
+    /// the original run did (tracking, RANSAC and recoverPose depend only on
+    /// the images and the points carried since the last detection), which is
+    /// how a long run's old frames are shown without keeping their points. The
+    /// pose restarts at the identity, so positions are not the run's.
+    pub fn resume(
+        cam: Camera,
+        detector: Detector,
+        frame: usize,
+        img: &GrayImage,
+        refs: Vec<[f32; 2]>,
+        gt: Option<&PoseRow>,
+    ) -> Result<Odometry> {
+        let mut odo = Odometry::with_detector(cam, detector)?;
+        odo.frame = frame;
+        odo.check_frame(img)?;
+        odo.refs = refs;
+        odo.last = Some(((img.width(), img.height()), Pyramid::new(img, odo.lk.max_level)));
+        odo.prev_gt = gt.copied();
+        odo.frame = frame + 1;
+        Ok(odo)
+    }
+
     pub fn camera(&self) -> &Camera {
         &self.cam
     }
