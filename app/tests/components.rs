@@ -445,7 +445,14 @@ fn odometry_messages_round_trip_and_bad_poses_are_named() {
             total: 6,
             position: [0.5, -0.25, 1.75],
             truth: Some([0.0, 0.0, 2.0]),
-            counts: StepCounts { points_in: 1500, tracked: 2, essential_inliers: 1, pose_inliers: 1, redetected: true },
+            counts: StepCounts {
+                points_in: 1500,
+                tracked: 2,
+                essential_inliers: 1,
+                pose_inliers: 1,
+                redetected: true,
+                points_out: 1499,
+            },
             detail: Some(Box::new(StepDetail {
                 prev: vec![[1.5, 2.25], [3.0, 4.0]],
                 cur: vec![[1.0, 2.0], [3.5, 4.5]],
@@ -588,6 +595,50 @@ fn streamed_odometry_equals_the_one_worker_loop() {
         streamed.extend(handle(msg).into_iter().map(without_time));
     }
     assert_eq!(streamed, one_worker);
+    // Each frame's points recomputed from the last frame the loop detected on
+    // (what the page asks when an old frame of a long run is shown) are the
+    // run's, through the message encoding both ways.
+    let steps: Vec<(StepCounts, Option<Box<StepDetail>>)> = streamed
+        .iter()
+        .filter_map(|m| match m {
+            VoReply::Step { counts, detail, .. } => Some((*counts, detail.clone())),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(steps.len(), 4);
+    let points = |f: &Features| f.keypoints.iter().map(|k| [k.x, k.y]).collect::<Vec<_>>();
+    for i in 0..4 {
+        let from = (0..i).rev().find(|&j| j == 0 || steps[j].0.redetected).unwrap_or(0);
+        let msg = VoRequest::Replay {
+            token: 40 + i as u32,
+            from: from as u32,
+            frame: i as u32,
+            frames: frames[from..=i].to_vec(),
+            refs: points(&features[from]),
+            detected: (i > from && steps[i].0.redetected).then(|| points(&features[i])),
+            features: Vec::new(),
+        };
+        assert_eq!(Request::from_js(&msg.to_js()).unwrap(), Request::Odometry(msg.clone()));
+        let got = handle(msg);
+        let [reply] = got.as_slice() else { panic!("{got:?}") };
+        assert_eq!(VoReply::from_js(&reply.to_js()).unwrap(), *reply);
+        let VoReply::Replayed { token, frame, detail: Ok(detail) } = reply else { panic!("{reply:?}") };
+        assert_eq!((*token, *frame), (40 + i as u32, i as u32));
+        assert!(detail.is_some(), "frame {i}");
+        assert_eq!(detail, &steps[i].1, "frame {i} replayed from {from}");
+    }
+    // A frame the run has not reached is refused with the reason.
+    let got = handle(VoRequest::Replay {
+        token: 50,
+        from: 0,
+        frame: 9,
+        frames: Vec::new(),
+        refs: Vec::new(),
+        detected: None,
+        features: Vec::new(),
+    });
+    let [VoReply::Replayed { detail: Err(e), .. }] = got.as_slice() else { panic!("{got:?}") };
+    assert!(e.contains("frame 9 is not among the run's frames"), "{e}");
 
     // A frame out of turn ends the run with a message, and later frames are refused.
     assert!(handle(VoRequest::Start {

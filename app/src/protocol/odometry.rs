@@ -66,6 +66,22 @@ pub enum VoRequest {
     /// A matcher-driven run's next frame as its SIFT features, computed once
     /// by the page's SIFT workers and shared by every tracker of the page.
     Features { id: u32, frame: u32, features: Features },
+    /// Recompute what the run did with frame `frame` (its points and masks,
+    /// not kept for old frames of a long run) from frame `from`: for LK the
+    /// last frame the loop detected on, with `frames` the files `from` …
+    /// `frame`, `refs` the points detected on `from` and `detected` those on
+    /// `frame` if the loop re-detected there; for a matched run
+    /// `from = frame − 1` and `features` the two frames' features. The run's
+    /// own state is untouched; `token` names the answer.
+    Replay {
+        token: u32,
+        from: u32,
+        frame: u32,
+        frames: Vec<Vec<u8>>,
+        refs: Vec<[f32; 2]>,
+        detected: Option<Vec<[f32; 2]>>,
+        features: Vec<Features>,
+    },
 }
 
 /// Tracking worker → page.
@@ -91,6 +107,9 @@ pub enum VoReply {
     Done { id: u32, ate: f64, png: Vec<u8>, ms: f64, kitti: String },
     /// A user-facing message; the run is over.
     Failed { id: u32, message: String },
+    /// The answer to [`VoRequest::Replay`] `token`: the frame's points (`None`
+    /// where the run recorded none, e.g. fewer than 5 matches), or why not.
+    Replayed { token: u32, frame: u32, detail: Result<Option<Box<StepDetail>>, String> },
 }
 
 /// What one frame of the loop counted (`vo::StepResult`'s fields, as
@@ -102,6 +121,8 @@ pub struct StepCounts {
     pub essential_inliers: u32,
     pub pose_inliers: u32,
     pub redetected: bool,
+    /// The points carried to the next frame (SIFT's count where it re-detected).
+    pub points_out: u32,
 }
 
 impl StepCounts {
@@ -112,6 +133,7 @@ impl StepCounts {
             essential_inliers: s.essential_inliers as u32,
             pose_inliers: s.pose_inliers as u32,
             redetected: s.redetected,
+            points_out: s.points_out as u32,
         }
     }
 }
@@ -167,6 +189,23 @@ impl VoRequest {
                 set(&o, "frame", &(*frame).into());
                 set_features(&o, "", features);
             }
+            VoRequest::Replay { token, from, frame, frames, refs, detected, features } => {
+                set(&o, "type", &"voReplay".into());
+                set(&o, "id", &(*token).into());
+                set(&o, "from", &(*from).into());
+                set(&o, "frame", &(*frame).into());
+                let files = js_sys::Array::new();
+                for f in frames {
+                    files.push(&Uint8Array::from(f.as_slice()));
+                }
+                set(&o, "frames", &files.into());
+                set(&o, "refs", &points_js(refs));
+                set(&o, "detected", &detected.as_deref().map(points_js).unwrap_or(JsValue::NULL));
+                set(&o, "nFeatures", &(features.len() as u32).into());
+                for (k, f) in features.iter().enumerate() {
+                    set_features(&o, &format!("f{k}"), f);
+                }
+            }
         }
         o.into()
     }
@@ -189,11 +228,33 @@ impl VoRequest {
                     bytes: get_bytes(v, "bytes")?,
                     points: get_points(v, "points")?,
                 },
+                "voReplay" => {
+                    let files = get(v, "frames")?
+                        .dyn_into::<js_sys::Array>()
+                        .map_err(|_| "voReplay: frames is not an array".to_string())?;
+                    let frames = files
+                        .iter()
+                        .map(|f| f.dyn_into::<Uint8Array>().map(|a| a.to_vec()))
+                        .collect::<Result<Vec<_>, _>>()
+                        .map_err(|_| "voReplay: a frame is not bytes".to_string())?;
+                    let features = (0..get_u32(v, "nFeatures")?.min(2))
+                        .map(|k| get_features(v, &format!("f{k}")))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    VoRequest::Replay {
+                        token: id,
+                        from: get_u32(v, "from")?,
+                        frame: get_u32(v, "frame")?,
+                        frames,
+                        refs: get_points(v, "refs")?.unwrap_or_default(),
+                        detected: get_points(v, "detected")?,
+                        features,
+                    }
+                }
                 _ => VoRequest::Features { id, frame: get_u32(v, "frame")?, features: get_features(v, "")? },
             })
         };
         let k = kind(v).ok()?;
-        matches!(k.as_str(), "voStart" | "voFrame" | "voFeatures").then(|| parse(&k))
+        matches!(k.as_str(), "voStart" | "voFrame" | "voFeatures" | "voReplay").then(|| parse(&k))
     }
 }
 
@@ -213,6 +274,7 @@ impl VoReply {
                 set(&o, "essentialInliers", &counts.essential_inliers.into());
                 set(&o, "poseInliers", &counts.pose_inliers.into());
                 set(&o, "redetected", &counts.redetected.into());
+                set(&o, "pointsOut", &counts.points_out.into());
                 if let Some(d) = detail {
                     set_detail(&o, d);
                 }
@@ -233,6 +295,16 @@ impl VoReply {
             VoReply::Failed { id, message } => {
                 set_failed(&o, *id, message);
             }
+            VoReply::Replayed { token, frame, detail } => {
+                set(&o, "type", &"voReplayed".into());
+                set(&o, "id", &(*token).into());
+                set(&o, "frame", &(*frame).into());
+                match detail {
+                    Ok(Some(d)) => set_detail(&o, d),
+                    Ok(None) => {}
+                    Err(e) => set(&o, "error", &e.as_str().into()),
+                }
+            }
         }
         o.into()
     }
@@ -251,6 +323,7 @@ impl VoReply {
                     essential_inliers: get_u32(v, "essentialInliers")?,
                     pose_inliers: get_u32(v, "poseInliers")?,
                     redetected: get(v, "redetected")?.as_bool().unwrap_or(false),
+                    points_out: get_u32(v, "pointsOut")?,
                 },
                 detail: get_detail(v)?,
             }),
@@ -271,6 +344,14 @@ impl VoReply {
                 kitti: get_str(v, "kitti")?,
             }),
             "failed" => Ok(VoReply::Failed { id: get_u32(v, "id")?, message: get_str(v, "message")? }),
+            "voReplayed" => Ok(VoReply::Replayed {
+                token: get_u32(v, "id")?,
+                frame: get_u32(v, "frame")?,
+                detail: match get(v, "error")?.as_string() {
+                    Some(e) => Err(e),
+                    None => Ok(get_detail(v)?),
+                },
+            }),
             other => Err(format!("not a tracking worker's reply: {other:?}")),
         }
     }

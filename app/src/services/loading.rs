@@ -9,7 +9,7 @@ use crate::model::sequence::{default_sequence, sequence_option, SequenceInfo};
 use crate::platform::now_ms;
 use crate::services::sift_pool;
 use leptos::prelude::*;
-use siftlab_core::dataset::{check_same_size, scan_paths, sequence_camera, SequenceFiles, SequenceLayout};
+use siftlab_core::dataset::{scan_paths, sequence_camera, SequenceFiles, SequenceLayout};
 use siftlab_core::vo::Camera;
 use std::cell::RefCell;
 use std::collections::BTreeMap;
@@ -370,17 +370,65 @@ pub async fn frame_bytes(source: &Source, id: u32) -> Result<Vec<u8>, String> {
     }
 }
 
-/// What the odometry runs on: frames 0..n, the ground-truth poses (the
-/// lab's loop takes each frame's scale from them) and the sequence's camera.
+/// Where an odometry run reads its frames, one at a time when it needs
+/// them: the demo's files (fetched from our origin) or a picked folder's
+/// `File`s. A long sequence is never held in memory: a run keeps only the
+/// frames within its look-ahead (issue 44: 4541 KITTI frames are 1.7 GB).
+#[derive(Clone)]
+pub enum FrameSource {
+    Demo(usize),
+    Folder(std::rc::Rc<Vec<web_sys::File>>),
+}
+
+impl FrameSource {
+    /// The number of frames, 0 … len − 1.
+    pub fn len(&self) -> usize {
+        match self {
+            FrameSource::Demo(n) => *n,
+            FrameSource::Folder(files) => files.len(),
+        }
+    }
+
+    /// Frame `i`'s file.
+    pub async fn bytes(&self, i: usize) -> Result<Vec<u8>, String> {
+        match self {
+            FrameSource::Demo(_) => fetch_bytes(&format!("demo/{}", frame_path(i as u32))).await,
+            FrameSource::Folder(files) => {
+                let file = files.get(i).ok_or("open the folder again")?;
+                read_file(file).await.map_err(|e| format!("{}: {e}", frame_path(i as u32)))
+            }
+        }
+    }
+
+    /// An address the page can show frame `i` from, and whether it is an
+    /// object URL to revoke when done (a folder's file: the browser reads it
+    /// from disk, no copy in the page's memory).
+    pub fn url(&self, i: usize) -> Option<(String, bool)> {
+        match self {
+            FrameSource::Demo(n) => (i < *n).then(|| (format!("demo/{}", frame_path(i as u32)), false)),
+            FrameSource::Folder(files) => {
+                web_sys::Url::create_object_url_with_blob(files.get(i)?).ok().map(|u| (u, true))
+            }
+        }
+    }
+}
+
+/// What the odometry runs on: frames 0..n (read as the run goes), the
+/// ground-truth poses (the lab's loop takes each frame's scale from them),
+/// the sequence's camera, and frame 0's size (from its PNG header; `None`
+/// for another format).
+#[derive(Clone)]
 pub struct VoInputs {
-    pub frames: Vec<Vec<u8>>,
+    pub frames: FrameSource,
     pub poses: String,
     pub camera: Camera,
+    pub size: Option<(u32, u32)>,
 }
 
 /// Frames 0..n, the ground-truth poses and the camera of the current source,
 /// for the odometry view (the lab's `view_trajectory FRAME_ID` runs frames
-/// 0 … FRAME_ID, so n = FRAME_ID + 1). Every frame must have frame 0's size.
+/// 0 … FRAME_ID, so n = FRAME_ID + 1). Only frame 0 is read here; the run
+/// checks each later frame's size against it as it reads it.
 pub async fn vo_inputs(source: &Source, n: u32) -> Result<VoInputs, String> {
     if let Some(missing) = (0..n).find(|i| !source.frames().contains(i)) {
         return Err(format!(
@@ -389,14 +437,13 @@ pub async fn vo_inputs(source: &Source, n: u32) -> Result<VoInputs, String> {
             n.saturating_sub(1)
         ));
     }
-    let mut frames = Vec::with_capacity(n as usize);
-    let (poses, camera, seq) = match source {
-        Source::Demo(_) => {
-            for i in 0..n {
-                frames.push(fetch_bytes(&format!("demo/{}", frame_path(i))).await?);
-            }
-            (fetch_text("demo/poses/00.txt").await?, Camera::default(), SequenceLayout::lab())
-        }
+    let (frames, poses, camera, seq) = match source {
+        Source::Demo(_) => (
+            FrameSource::Demo(n as usize),
+            fetch_text("demo/poses/00.txt").await?,
+            Camera::default(),
+            SequenceLayout::lab(),
+        ),
         Source::Folder(_) => {
             let (seq, poses, camera) = FOLDER
                 .with(|f| f.borrow().as_ref().map(|f| (f.seq.clone(), f.poses.clone(), f.camera)))
@@ -408,17 +455,13 @@ pub async fn vo_inputs(source: &Source, n: u32) -> Result<VoInputs, String> {
                     seq.poses_file()
                 )
             })?;
-            for i in 0..n {
-                let file = folder_file(i).ok_or("open the folder again")?;
-                frames.push(read_file(&file).await.map_err(|e| format!("{}: {e}", frame_path(i)))?);
-            }
+            let files = (0..n).map(|i| folder_file(i).ok_or("open the folder again")).collect::<Result<Vec<_>, _>>()?;
             let bytes = read_file(&poses).await?;
             let text = String::from_utf8(bytes).map_err(|_| format!("{} is not text", seq.poses_file()))?;
-            (text, camera, seq)
+            (FrameSource::Folder(std::rc::Rc::new(files)), text, camera, seq)
         }
         Source::Files => return Err("the odometry needs the demo or a MyKITTI folder (frames 0, 1, 2, …)".into()),
     };
-    check_same_size(&frames, &seq).map_err(|e| e.to_string())?;
     // The poses are read here, where the file's name is known, so that a
     // malformed or short file is named (the workers only see its text).
     let file = seq.poses_file();
@@ -430,7 +473,8 @@ pub async fn vo_inputs(source: &Source, n: u32) -> Result<VoInputs, String> {
             n - 1
         ));
     }
-    Ok(VoInputs { frames, poses, camera })
+    let size = crate::model::odometry::frame::png_size(&frames.bytes(0).await?);
+    Ok(VoInputs { frames, poses, camera, size })
 }
 
 /// The ground-truth poses of frames FRAME_ID-1 and FRAME_ID when the source

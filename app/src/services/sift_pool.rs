@@ -10,7 +10,6 @@ use crate::protocol::Request;
 use crate::services::worker_handle::WorkerHandle;
 use std::cell::RefCell;
 use std::collections::HashMap;
-use std::sync::Arc;
 
 type Progress = Box<dyn Fn(String)>;
 type Done = Box<dyn FnOnce(Result<SiftResult, String>)>;
@@ -22,6 +21,7 @@ struct Waiter {
 
 struct Job {
     key: u64,
+    gray: bool,
     slot: usize,
     waiters: Vec<Waiter>,
 }
@@ -56,7 +56,8 @@ struct Pool {
     slots: Vec<Option<Slot>>,
     next_id: u32,
     jobs: HashMap<u32, Job>,
-    in_flight: HashMap<u64, u32>,
+    /// Jobs by (content key, with the gray image).
+    in_flight: HashMap<(u64, bool), u32>,
     cache: HashMap<u64, Cached>,
     cache_bytes: usize,
     tick: u64,
@@ -164,7 +165,7 @@ fn finish(id: u32, r: Result<SiftResult, String>) {
     let job = POOL.with(|p| {
         let mut p = p.borrow_mut();
         let job = p.jobs.remove(&id)?;
-        p.in_flight.remove(&job.key);
+        p.in_flight.remove(&(job.key, job.gray));
         if let Some(Some(s)) = p.slots.get_mut(job.slot) {
             s.load = s.load.saturating_sub(1);
         }
@@ -204,12 +205,11 @@ pub(crate) fn worker_script() -> String {
     POOL.with(|p| p.borrow().script.clone())
 }
 
-/// A frame already analysed with these exact bytes, if any (with its gray
-/// image, decoded here if the cache kept only the features).
+/// A frame already analysed with these exact bytes, if the cache holds it
+/// with its gray image.
 pub fn cached(bytes: &[u8], lanes: usize) -> Option<SiftResult> {
     let key = content_key(bytes, lanes);
-    let hit = POOL.with(|p| p.borrow_mut().cache_get(key))?;
-    with_gray(hit, bytes).ok()
+    POOL.with(|p| p.borrow_mut().cache_get(key)).filter(has_gray)
 }
 
 /// Stores a result computed elsewhere (tests, or a frame analysed in-process).
@@ -218,15 +218,11 @@ pub fn insert_cache(bytes: &[u8], lanes: usize, r: SiftResult) {
     POOL.with(|p| p.borrow_mut().cache_put(key, r));
 }
 
-/// `r` with its gray image: an odometry frame's result is cached without it,
-/// and decoding the file again here (milliseconds) is cheaper than keeping
-/// 0.47 MB per KITTI frame.
-fn with_gray(mut r: SiftResult, bytes: &[u8]) -> Result<SiftResult, String> {
-    if r.gray.is_empty() && r.width * r.height > 0 {
-        let img = siftlab_core::GrayImage::decode(bytes).map_err(|e| e.to_string())?;
-        r.gray = img.data().to_vec();
-    }
-    Ok(r)
+/// Whether `r` can be drawn: an odometry frame's result is cached without
+/// its gray image (0.47 MB per KITTI frame), and the page has no image
+/// decoder of its own (it stays small), so such a hit goes to a worker again.
+fn has_gray(r: &SiftResult) -> bool {
+    !r.gray.is_empty() || r.width * r.height == 0
 }
 
 /// Runs SIFT on `bytes` in a worker. `done` is called exactly once (immediately
@@ -237,8 +233,6 @@ pub fn sift(
     progress: impl Fn(String) + 'static,
     done: impl FnOnce(Result<SiftResult, String>) + 'static,
 ) {
-    let file = Arc::new(bytes.clone());
-    let done = move |r: Result<SiftResult, String>| done(r.and_then(|r| with_gray(r, &file)));
     request(bytes, lanes, true, Box::new(progress), Box::new(done));
 }
 
@@ -251,14 +245,16 @@ pub fn features(bytes: Vec<u8>, done: impl FnOnce(Result<SiftResult, String>) + 
 
 fn request(bytes: Vec<u8>, lanes: usize, gray: bool, progress: Progress, done: Done) {
     let key = content_key(&bytes, lanes);
-    if let Some(hit) = POOL.with(|p| p.borrow_mut().cache_get(key)) {
+    if let Some(hit) = POOL.with(|p| p.borrow_mut().cache_get(key)).filter(|r| !gray || has_gray(r)) {
         done(Ok(hit));
         return;
     }
     let waiter = Waiter { progress, done };
     let failed: Result<(), (String, Waiter)> = POOL.with(|p| {
         let mut p = p.borrow_mut();
-        if let Some(id) = p.in_flight.get(&key).copied() {
+        // A features request shares a job that also draws the image; not the reverse.
+        let joined = p.in_flight.get(&(key, true)).or(if gray { None } else { p.in_flight.get(&(key, false)) });
+        if let Some(id) = joined.copied() {
             if let Some(job) = p.jobs.get_mut(&id) {
                 job.waiters.push(waiter);
                 return Ok(());
@@ -279,8 +275,8 @@ fn request(bytes: Vec<u8>, lanes: usize, gray: bool, progress: Progress, done: D
         let slot = (0..workers).min_by_key(|&i| load(&p.slots[i])).unwrap_or(0);
         p.next_id = p.next_id.wrapping_add(1);
         let id = p.next_id;
-        p.jobs.insert(id, Job { key, slot, waiters: vec![waiter] });
-        p.in_flight.insert(key, id);
+        p.jobs.insert(id, Job { key, gray, slot, waiters: vec![waiter] });
+        p.in_flight.insert((key, gray), id);
         if let Some(s) = p.slots[slot].as_mut() {
             s.load += 1;
             let lanes = lanes as u32;

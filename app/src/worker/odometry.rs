@@ -27,6 +27,15 @@ pub fn handle(req: VoRequest, post: &dyn Fn(VoReply)) {
         VoRequest::Features { id, frame, features } => {
             on_session(id, post, |session| session.frame(frame as usize, Input::Features(features), post))
         }
+        VoRequest::Replay { token, from, frame, frames, refs, detected, features } => {
+            let detail = SESSION.with(|s| match s.borrow().as_ref() {
+                Some(session) => session.replay(from as usize, frame as usize, &frames, refs, detected, features),
+                None => {
+                    Err("the run is over (it was stopped or failed): run the odometry again to see this frame".into())
+                }
+            });
+            post(VoReply::Replayed { token, frame, detail })
+        }
     }
 }
 
@@ -111,6 +120,55 @@ impl VoSession {
         m.record_detail = true;
         self.matched = Some(m);
         Ok(self)
+    }
+
+    /// What the run did with frame `frame`, recomputed from frame `from` (see
+    /// [`VoRequest::Replay`]) without touching the run: the core's `resume`
+    /// gives the same points and masks as the run's own step.
+    fn replay(
+        &self,
+        from: usize,
+        frame: usize,
+        frames: &[Vec<u8>],
+        refs: Vec<[f32; 2]>,
+        detected: Option<Vec<[f32; 2]>>,
+        mut features: Vec<siftlab_core::sift::Features>,
+    ) -> Result<Option<Box<siftlab_core::vo::StepDetail>>, String> {
+        use siftlab_core::vo::{sift_detector, MatchedOdometry, Odometry, StepDetail};
+        if frame >= self.est.len() || from > frame {
+            return Err(format!("frame {frame} is not among the run's frames so far"));
+        }
+        let gt = |i: usize| self.poses.get(i);
+        let e = |e: siftlab_core::Error| e.to_string();
+        if let Some(m) = &self.matched {
+            if frame == 0 {
+                return Ok(None);
+            }
+            let (Some(cur), Some(prev)) = (features.pop(), features.pop()) else {
+                return Err("a matched run's frame is replayed from two frames' features".into());
+            };
+            let mut odo =
+                MatchedOdometry::resume(self.camera, *m.strategy(), frame - 1, prev, gt(frame - 1)).map_err(e)?;
+            odo.record_detail = true;
+            return Ok(odo.step_features(cur, gt(frame)).map_err(e)?.detail);
+        }
+        if frames.len() != frame - from + 1 {
+            return Err(format!("frames {from} … {frame} are {} files, not {}", frames.len(), frame - from + 1));
+        }
+        let decode = |k: usize| GrayImage::decode(&frames[k]).map_err(|e| format!("frame {}: {e}", from + k));
+        if frame == from {
+            return Ok(Some(Box::new(StepDetail { detected: refs, ..StepDetail::default() })));
+        }
+        // Re-detection between `from` and `frame` does not happen (`from` is the
+        // last detection); at `frame` it uses the points the page sent.
+        let detector = sift_detector(siftlab_core::sift::SiftParams::for_host());
+        let mut odo = Odometry::resume(self.camera, detector, from, &decode(0)?, refs, gt(from)).map_err(e)?;
+        let last = frames.len() - 1;
+        for k in 1..last {
+            odo.step(&decode(k)?, gt(from + k)).map_err(e)?;
+        }
+        odo.record_detail = true;
+        Ok(odo.step_detected(&decode(last)?, gt(frame), detected).map_err(e)?.detail)
     }
 
     /// Frame `i` (the next one): one step, posted; after the last, the

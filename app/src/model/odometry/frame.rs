@@ -50,6 +50,16 @@ pub fn flow_paths(d: &StepDetail) -> FlowPaths {
     out
 }
 
+/// The frame an old frame's points are recomputed from: for LK the last
+/// frame before it the loop detected on (frame 0 always did), for a matched
+/// run the frame before.
+pub fn replay_from(counts: &[StepCounts], frame: usize, lk: bool) -> usize {
+    if !lk || frame == 0 {
+        return frame.saturating_sub(1);
+    }
+    (0..frame).rev().find(|&j| j == 0 || counts[j].redetected).unwrap_or(0)
+}
+
 /// "a of b (p %)", or "a" when b is 0.
 fn share(a: u32, b: u32) -> String {
     if b == 0 {
@@ -122,6 +132,17 @@ pub fn chart_top(values: &[u32]) -> u32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn replays_start_at_the_last_detection() {
+        let c = |redetected| StepCounts { redetected, ..StepCounts::default() };
+        // Frame 0 detects; frames 1, 2 track; 3 re-detects; 4, 5 track.
+        let counts = [c(true), c(false), c(false), c(true), c(false), c(false)];
+        let lk: Vec<usize> = (0..6).map(|i| replay_from(&counts, i, true)).collect();
+        assert_eq!(lk, [0, 0, 0, 0, 3, 3]);
+        let matched: Vec<usize> = (0..6).map(|i| replay_from(&counts, i, false)).collect();
+        assert_eq!(matched, [0, 0, 1, 2, 3, 4]);
+    }
 
     #[test]
     fn png_size_reads_ihdr() {

@@ -23,9 +23,8 @@ struct Ctx {
     status: RwSignal<String>,
     running: RwSignal<bool>,
     error: RwSignal<Option<String>>,
-    frames: StoredValue<Vec<Vec<u8>>, LocalStorage>,
-    poses: StoredValue<String>,
-    camera: StoredValue<siftlab_core::vo::Camera>,
+    /// The run's frames (read as it goes), poses and camera.
+    inputs: StoredValue<Option<loading::VoInputs>, LocalStorage>,
     /// Per run: its estimated poses (KITTI format) as a download, once done.
     poses_urls: RwSignal<Vec<Option<String>>>,
 }
@@ -45,9 +44,8 @@ fn start(ctx: Ctx) {
         }
         u.resize(n, None);
     });
-    let frames = ctx.frames.get_value();
-    let total = frames.len();
-    let poses = ctx.poses.get_value();
+    let Some(inputs) = ctx.inputs.get_value() else { return };
+    let total = inputs.frames.len();
     // Which trackers are over (done or failed): the last one ends the comparison.
     let over = std::rc::Rc::new(std::cell::RefCell::new(vec![false; n]));
     let on_event = move |k: usize, m: VoReply| {
@@ -76,6 +74,7 @@ fn start(ctx: Ctx) {
                 });
                 true
             }
+            VoReply::Replayed { .. } => false,
             VoReply::Failed { message, .. } => {
                 let e = format!("{}: {message}", run_style(runs[k].strategy()).0);
                 ctx.error.update(|old| *old = Some(old.take().map_or(e.clone(), |o| format!("{o}; {e}"))));
@@ -94,7 +93,6 @@ fn start(ctx: Ctx) {
             }
         }
     };
-    let inputs = crate::services::loading::VoInputs { frames, poses, camera: ctx.camera.get_value() };
     if let Err(e) = odometry::start(inputs, &runs, on_event) {
         ctx.error.set(Some(e));
         ctx.running.set(false);
@@ -111,9 +109,7 @@ pub fn OdometryCompare(source: Signal<Source>, count: Signal<Result<u32, String>
         status: RwSignal::new(String::new()),
         running: RwSignal::new(false),
         error: RwSignal::new(None),
-        frames: StoredValue::new_local(Vec::new()),
-        poses: StoredValue::new(String::new()),
-        camera: StoredValue::new(siftlab_core::vo::Camera::default()),
+        inputs: StoredValue::new_local(None),
         poses_urls: RwSignal::new(Vec::new()),
     };
     let run = move |_| {
@@ -129,9 +125,7 @@ pub fn OdometryCompare(source: Signal<Source>, count: Signal<Result<u32, String>
         leptos::task::spawn_local(async move {
             match loading::vo_inputs(&source, n).await {
                 Ok(inputs) => {
-                    ctx.frames.set_value(inputs.frames);
-                    ctx.poses.set_value(inputs.poses);
-                    ctx.camera.set_value(inputs.camera);
+                    ctx.inputs.set_value(Some(inputs));
                     start(ctx);
                 }
                 Err(e) => {
@@ -192,8 +186,9 @@ pub fn OdometryCompare(source: Signal<Source>, count: Signal<Result<u32, String>
                 </div>
                 {move || {
                     let done = ctx.results.with(|r| r.iter().any(|r| r.metrics.is_some()));
-                    let n = ctx.frames.with_value(|f| f.len());
-                    let note = done.then(|| ctx.poses.with_value(|p| kitti_note_text(p, n))).flatten()?;
+                    let note = done
+                        .then(|| ctx.inputs.with_value(|i| i.as_ref().and_then(|i| kitti_note_text(&i.poses, i.frames.len()))))
+                        .flatten()?;
                     Some(view! {
                         <p class="small" data-testid="vo-compare-kitti">
                             {note}

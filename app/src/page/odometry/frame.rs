@@ -3,25 +3,26 @@
 //! previous frame, findEssentialMat's RANSAC inliers and outliers, the points
 //! SIFT re-detected — with the frame's counts, and a chart of tracked points
 //! and inliers per frame. While the run lasts it follows the newest frame; a
-//! slider (or the arrow keys on it) steps through the frames run so far.
+//! slider (or the arrow keys on it) steps through the frames run so far. Only
+//! the newest frame's points are kept (a long run would hold ~46 KB a frame):
+//! an older frame's are recomputed by its tracker's worker when it is shown.
 
 use crate::model::odometry::frame::{
-    chart_top, chart_x, counts_text, flow_paths, png_size, redetections_text, series_points,
+    chart_top, chart_x, counts_text, flow_paths, redetections_text, replay_from, series_points,
 };
 use crate::page::legend::{Legend, Sw};
-use crate::platform::{blob_url, revoke};
+use crate::platform::revoke;
 use crate::protocol::odometry::StepCounts;
+use crate::services::loading::FrameSource;
+use crate::services::odometry;
 use leptos::prelude::*;
 use siftlab_core::render::palette::{hex, Style, INLIER, OUTLIER, REDETECTED, SKY_BLUE, TRACKERS};
 use siftlab_core::vo::StepDetail;
 use std::sync::Arc;
 
-/// One frame of the run as the view keeps it.
-#[derive(Clone, Debug, PartialEq)]
-pub struct FrameStep {
-    pub counts: StepCounts,
-    pub detail: Option<Arc<StepDetail>>,
-}
+/// A frame's points: the frame, and its detail (`None` where the run
+/// recorded none: fewer than 5 matches, or frame 0 of a matched run).
+pub type FrameDetail = (usize, Option<Arc<StepDetail>>);
 
 const LEGEND: &[Sw] = &[
     Sw { style: INLIER, line: true, outline: true, label: " RANSAC inlier (solid, circled end) " },
@@ -41,10 +42,16 @@ const SERIES: [Series; 3] = [
 
 #[component]
 pub fn OdometryFrameView(
-    /// The run's frames as PNG bytes, by frame index.
-    frames: StoredValue<Vec<Vec<u8>>, LocalStorage>,
+    /// Where the run's frames are read (for the picture).
+    source: StoredValue<Option<FrameSource>, LocalStorage>,
+    /// Frame 0's size: the picture's.
+    size: RwSignal<Option<(u32, u32)>>,
     /// One entry per frame done.
-    steps: RwSignal<Vec<FrameStep>>,
+    steps: RwSignal<Vec<StepCounts>>,
+    /// The newest frame's points.
+    newest: RwSignal<Option<FrameDetail>>,
+    /// The run's generation ([`odometry::start`]), for replays.
+    generation: StoredValue<u32>,
     /// Whether the run tracks with Lucas–Kanade (else a strategy's matches).
     lk: Signal<bool>,
 ) -> impl IntoView {
@@ -58,40 +65,67 @@ pub fn OdometryFrameView(
         let n = count();
         (n > 0).then(|| picked.get().map_or(n - 1, |p| p.min(n - 1)))
     };
-    // The shown frame's image as an object URL (revoked when it changes).
-    let url = RwSignal::new(None::<(usize, String)>);
+    // The shown frame's image: the demo's file, or an object URL of the
+    // folder's file (revoked when it changes).
+    let url = RwSignal::new(None::<(usize, String, bool)>);
     Effect::new(move |_| {
         let Some(i) = shown() else { return };
-        if url.with_untracked(|u| u.as_ref().is_some_and(|(j, _)| *j == i)) {
+        if url.with_untracked(|u| u.as_ref().is_some_and(|(j, _, _)| *j == i)) {
             return;
         }
-        let new = frames.with_value(|f| f.get(i).and_then(|b| blob_url(b)));
-        if let Some((_, old)) = url.get_untracked() {
+        let new = source.with_value(|s| s.as_ref().and_then(|s| s.url(i)));
+        if let Some((_, old, true)) = url.get_untracked() {
             revoke(Some(old));
         }
-        url.set(new.map(|u| (i, u)));
+        url.set(new.map(|(u, revocable)| (i, u, revocable)));
     });
     on_cleanup(move || {
-        if let Some((_, old)) = url.get_untracked() {
+        if let Some((_, old, true)) = url.get_untracked() {
             revoke(Some(old));
         }
     });
-    let size = move || {
+
+    // An older frame's points, recomputed on demand: one replay at a time;
+    // when it ends, the frame shown then is asked for if it differs.
+    let replayed = RwSignal::new(None::<(usize, Result<Option<Arc<StepDetail>>, String>)>);
+    let asking = StoredValue::new(None::<usize>);
+    Effect::new(move |_| {
+        let Some(i) = shown() else { return };
+        let newest_frame = newest.with(|n| n.as_ref().map(|(f, _)| *f));
+        if newest_frame == Some(i) || replayed.with(|r| r.as_ref().is_some_and(|(f, _)| *f == i)) {
+            return;
+        }
+        if asking.get_value().is_some() {
+            return;
+        }
+        let (from, redetected) = steps.with_untracked(|s| (replay_from(s, i, lk.get_untracked()), s[i].redetected));
+        asking.set_value(Some(i));
+        odometry::replay(generation.get_value(), 0, i, from, redetected, move |r| {
+            asking.set_value(None);
+            replayed.set(Some((i, r.map(|d| d.map(Arc::from)))));
+        });
+    });
+    // The shown frame's points, when known: Ok(None) for a frame without any.
+    let detail = move || -> Option<Result<Option<Arc<StepDetail>>, String>> {
         let i = shown()?;
-        frames.with_value(|f| f.get(i).and_then(|b| png_size(b)))
+        if let Some(d) = newest.with(|n| n.as_ref().filter(|(f, _)| *f == i).map(|(_, d)| d.clone())) {
+            return Some(Ok(d));
+        }
+        replayed.with(|r| r.as_ref().filter(|(f, _)| *f == i).map(|(_, d)| d.clone()))
     };
 
     let picture = move || {
         let i = shown()?;
-        let (w, h) = size()?;
-        let href = url.with(|u| u.as_ref().filter(|(j, _)| *j == i).map(|(_, u)| u.clone()))?;
-        let step = steps.with(|s| s.get(i).cloned())?;
-        let paths = step.detail.as_deref().map(flow_paths).unwrap_or_default();
+        let (w, h) = size.get()?;
+        let href = url.with(|u| u.as_ref().filter(|(j, _, _)| *j == i).map(|(_, u, _)| u.clone()))?;
+        let known = detail();
+        let paths = known.clone().and_then(Result::ok).flatten().as_deref().map(flow_paths).unwrap_or_default();
         let dash = |s: &Style| s.dasharray().unwrap_or_default();
         Some(view! {
             <svg
                 class="vo-flow"
                 data-testid="vo-flow"
+                data-detail-frame=known.as_ref().map(|_| i.to_string())
                 viewBox=format!("0 0 {w} {h}")
                 role="img"
                 aria-label=format!("frame {i} with the points the odometry used")
@@ -103,14 +137,22 @@ pub fn OdometryFrameView(
                 <path d=paths.outlier_ends class="flow-end" stroke=hex(OUTLIER.color)/>
                 {show_detected.get().then(|| view! { <path d=paths.detected.clone() class="flow-end" stroke=hex(REDETECTED.color)/> })}
             </svg>
+            {match known {
+                None => Some(view! {
+                    <p class="muted small" data-testid="vo-replay-pending">
+                        {format!("recomputing the points of frame {i} (a long run keeps only the newest frame's)…")}
+                    </p>
+                }.into_any()),
+                Some(Err(e)) => Some(view! { <p class="error small" data-testid="vo-replay-error">{e}</p> }.into_any()),
+                Some(Ok(_)) => None,
+            }}
         })
     };
 
     let counts = move || {
         let i = shown()?;
-        let step = steps.with(|s| s.get(i).cloned())?;
-        let c = step.counts;
-        let detected = step.detail.as_ref().map_or(0, |d| d.detected.len());
+        let c = steps.with(|s| s.get(i).copied())?;
+        let detected = if c.redetected { c.points_out as usize } else { 0 };
         Some(view! {
             <p
                 class="small"
@@ -127,7 +169,7 @@ pub fn OdometryFrameView(
     };
 
     let chart = move || {
-        let all: Vec<StepCounts> = steps.with(|s| s.iter().map(|f| f.counts).collect());
+        let all: Vec<StepCounts> = steps.get();
         if all.len() < 2 {
             return None;
         }
@@ -212,7 +254,7 @@ pub fn OdometryFrameView(
                         prop:checked=move || show_detected.get()
                         on:change=move |ev| show_detected.set(event_target_checked(&ev))/>
                     {move || {
-                        let n = shown().and_then(|i| steps.with(|s| s.get(i).and_then(|f| f.detail.as_ref().map(|d| d.detected.len())))).unwrap_or(0);
+                        let n = shown().and_then(|i| steps.with(|s| s.get(i).map(|c| if c.redetected { c.points_out } else { 0 }))).unwrap_or(0);
                         format!(" show the {n} points SIFT re-detected on this frame (the next frame tracks them)")
                     }}
                 </label>

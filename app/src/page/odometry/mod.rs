@@ -18,13 +18,13 @@ use crate::model::odometry::{
 };
 use crate::model::plot::{percent, vo_done_text, vo_progress_text};
 use crate::platform::{blob_url, revoke};
-use crate::protocol::odometry::VoReply;
+use crate::protocol::odometry::{StepCounts, VoReply};
 use crate::services::loading;
 use crate::services::odometry;
 use crate::services::sift_pool;
 use compare::OdometryCompare;
 use figures::OdometryFigures;
-use frame::{FrameStep, OdometryFrameView};
+use frame::{FrameDetail, OdometryFrameView};
 use leptos::prelude::*;
 use siftlab_core::render::coordinates_text;
 use siftlab_core::vo::TrajectoryMetrics;
@@ -66,7 +66,9 @@ pub fn OdometryView() -> impl IntoView {
     let running = RwSignal::new(false);
     let error = RwSignal::new(None::<String>);
     let done = RwSignal::new(None::<Done>);
-    let frame_steps = RwSignal::new(Vec::<FrameStep>::new());
+    // Per frame its counts (a few bytes), and the newest frame's points.
+    let frame_steps = RwSignal::new(Vec::<StepCounts>::new());
+    let newest = RwSignal::new(None::<FrameDetail>);
     // The tracker menu (`None`: the lab's LK) and the strategy's threshold,
     // parsed into a tracker once per change; the run keeps the one it ran.
     let tracker = RwSignal::new(None::<siftlab_core::matching::StrategyKind>);
@@ -74,7 +76,10 @@ pub fn OdometryView() -> impl IntoView {
     let chosen = Memo::new(move |_| tracker_from(tracker.get(), &threshold.get()));
     let tracker_run = RwSignal::new(Tracker::Lk);
     let metrics = RwSignal::new(None::<TrajectoryMetrics>);
-    let frames = StoredValue::new_local(Vec::<Vec<u8>>::new());
+    // Where the run reads its frames, frame 0's size, and the run's generation.
+    let frames = StoredValue::new_local(None::<loading::FrameSource>);
+    let frame_size = RwSignal::new(None::<(u32, u32)>);
+    let generation = StoredValue::new(0u32);
     // The run's ground-truth poses (the poses file's text), for the KITTI note.
     let poses_text = StoredValue::new(String::new());
     // When the workers got the frames: the live rate counts from there.
@@ -108,6 +113,7 @@ pub fn OdometryView() -> impl IntoView {
         done.set(None);
         steps.set(vec![]);
         frame_steps.set(vec![]);
+        newest.set(None);
         total.set(n);
         running.set(true);
         let source = lab.source.get_untracked();
@@ -120,13 +126,15 @@ pub fn OdometryView() -> impl IntoView {
                     return;
                 }
             };
-            frames.set_value(inputs.frames.clone());
+            frames.set_value(Some(inputs.frames.clone()));
+            frame_size.set(inputs.size);
             poses_text.set_value(inputs.poses.clone());
             started_ms.set_value(crate::platform::now_ms());
             let on_event = move |m| match m {
                 VoReply::Step { frame, position, truth, counts, detail, .. } => {
                     steps.update(|s| s.push((frame, position, truth)));
-                    frame_steps.update(|s| s.push(FrameStep { counts, detail: detail.map(std::sync::Arc::from) }));
+                    frame_steps.update(|s| s.push(counts));
+                    newest.set(Some((frame as usize, detail.map(std::sync::Arc::from))));
                 }
                 VoReply::Metrics { metrics: m, .. } => metrics.set(Some(TrajectoryMetrics::from_array(&m))),
                 VoReply::Done { ate, png, ms, kitti, .. } => {
@@ -137,10 +145,14 @@ pub fn OdometryView() -> impl IntoView {
                     error.set(Some(message));
                     running.set(false);
                 }
+                VoReply::Replayed { .. } => {}
             };
-            if let Err(e) = odometry::start(inputs, &[chosen], move |_, m| on_event(m)) {
-                error.set(Some(e));
-                running.set(false);
+            match odometry::start(inputs, &[chosen], move |_, m| on_event(m)) {
+                Ok(g) => generation.set_value(g),
+                Err(e) => {
+                    error.set(Some(e));
+                    running.set(false);
+                }
             }
         });
     };
@@ -238,7 +250,7 @@ pub fn OdometryView() -> impl IntoView {
                         <OdometryFigures truth=truth runs=runs name="vo"/>
                         <p class="mono small" data-testid="vo-coordinates">{move || coordinates_text(&last())}</p>
                     </div>
-                    <OdometryFrameView frames=frames steps=frame_steps lk=Signal::derive(move || tracker_run.get() == Tracker::Lk)/>
+                    <OdometryFrameView source=frames size=frame_size steps=frame_steps newest=newest generation=generation lk=Signal::derive(move || tracker_run.get() == Tracker::Lk)/>
                 </div>
             </Show>
             {move || done.get().map(|d| view! {
