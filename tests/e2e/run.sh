@@ -8,8 +8,8 @@
 # app/common.mjs; one node --test run, so one count of cases) over W3C WebDriver
 # (harness.mjs), checked against the native CLI, and the accessibility checks (a11y.test.mjs:
 # axe-core, 390 px, colour-vision screenshots); then Playwright's Chromium-only extras
-# (chromium-extras.test.mjs) and the worker counts (workers.test.mjs: workers=1, 2, 3, 8 give
-# the CLI's poses).
+# (chromium-extras.test.mjs), the worker counts (workers.test.mjs: workers=1, 2, 3, 8 give
+# the CLI's poses) and the odometry's memory over 600 frames (vo-memory.test.mjs).
 #   E2E_ENGINES="chromium webkit" tests/e2e/run.sh      a subset of engines
 # Installs the npm packages and builds what is missing (dist/, the CLI). Screenshots and
 # measured figures land in tests/e2e/screenshots/<engine>/ (gitignored).
@@ -78,6 +78,9 @@ if [[ " $ENGINES " == *" chromium "* ]]; then
     # workers=1, 2, 3, 8: the odometry's and the comparison's poses equal the CLI's.
     echo "[e2e] === chromium (Playwright): workers.test.mjs" >&2
     node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 workers.test.mjs || STATUS=1
+    # A 600-frame folder: the renderer's memory does not grow with the run's length.
+    echo "[e2e] === chromium (Playwright): vo-memory.test.mjs" >&2
+    node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 vo-memory.test.mjs || STATUS=1
 fi
 
 echo "[e2e] per engine:" >&2
