@@ -65,3 +65,44 @@ test('page and workers: every request on our origin, no console error, real down
   assert.deepEqual(offOrigin, [], 'requests left the origin');
   assert.deepEqual(errors, [], 'console errors in the page or its workers');
 });
+
+// What a student does before the data has arrived (issue 42), made deterministic by
+// holding the demo's frame list and frame 1 back (Playwright's routing; the suite's
+// engines cannot hold a request):
+// - a FRAME_ID typed in the odometry before the frame list arrives stays;
+// - "Check my answer" pressed while the frames are computed says so, then checks.
+test('input before the data arrives: an early FRAME_ID stays, an early check waits', async () => {
+  const context = await browser.newContext({ viewport: { width: 1400, height: 900 } });
+  const tid = (id) => `[data-testid="${id}"]`;
+  const held = async (glob) => {
+    let release;
+    const gate = new Promise((r) => { release = r; });
+    await context.route(glob, async (route) => { await gate; await route.continue(); });
+    return release;
+  };
+  const releaseIndex = await held('**/demo/index.txt');
+  const releaseFrame = await held('**/gray/00/image_0/000001.png');
+  const page = await context.newPage();
+  const errors = [];
+  page.on('pageerror', (e) => errors.push(String(e)));
+  await page.goto(server.base);
+  await page.waitForSelector(tid('vo-frame-id'));
+  assert.match(await page.textContent(tid('vo-range')), /no frame 0/, 'the frame list arrived before the test typed');
+  await page.fill(tid('vo-frame-id'), '40');
+  releaseIndex();
+  await page.waitForFunction((sel) => (document.querySelector(sel)?.textContent || '').includes('available: frames 0 to 150'),
+    tid('vo-range'), { timeout: 60000 });
+  assert.equal(await page.inputValue(tid('vo-frame-id')), '40', 'the typed FRAME_ID was overwritten by the default');
+  assert.match(await page.textContent(tid('vo-range')), /^frames 0 to 40 \(41 frames\)/);
+  // Frame 1 is still held: the answer waits for the result, then gets its verdict.
+  await page.fill(tid('answer'), 'ret value: ((1, 2), [(3, 4)], [5.0])');
+  await page.click(tid('check'));
+  await page.waitForSelector(tid('check-pending'), { timeout: 5000 });
+  assert.equal(await page.$(tid('check-result')), null, 'a verdict before the frames were computed');
+  releaseFrame();
+  await page.waitForSelector(tid('check-result'), { timeout: 180000 });
+  assert.match(await page.textContent(tid('check-result')), /\S/);
+  assert.equal(await page.$(tid('check-pending')), null, 'still pending after the verdict');
+  await context.close();
+  assert.deepEqual(errors, []);
+});

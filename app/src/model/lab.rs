@@ -149,7 +149,15 @@ fn slot(kind: StrategyKind) -> usize {
 }
 
 impl Lab {
+    /// A lab with no clock (the analysis reports 0 ms): tests, and any use off
+    /// the page.
     pub fn new() -> Self {
+        Self::with_clock(|| 0.0)
+    }
+
+    /// A lab timing each analysis with `clock` (milliseconds): the page gives
+    /// the platform's, so that model stays plain logic.
+    pub fn with_clock(clock: fn() -> f64) -> Self {
         let prev = RwSignal::new(None::<Frame>);
         let cur = RwSignal::new(None::<Frame>);
         let algo = RwSignal::new(StrategyKind::Nndr);
@@ -161,7 +169,9 @@ impl Lab {
         });
         let analysis = Memo::new(move |_| {
             let (p, c) = (prev.get()?, cur.get()?);
-            Some(strategy.get().and_then(|s| analyse(&p, &c, s, &feature_text.get())))
+            let t0 = clock();
+            let analysis = strategy.get().and_then(|s| analyse(&p, &c, s, &feature_text.get()));
+            Some(analysis.map(|a| Analysis { ms: clock() - t0, ..a }))
         });
         Lab {
             prev,
@@ -229,11 +239,10 @@ impl Default for Lab {
 /// the strategy, `matching_info` and its formatting all live in the core;
 /// this only strings them together.
 pub fn analyse(prev: &Frame, cur: &Frame, strategy: Strategy, feature: &str) -> Result<Analysis, String> {
-    let t0 = crate::platform::now_ms();
     let feature = parse_feature(feature)?;
     let explanation = explain(&strategy, &prev.features, &cur.features, feature).map_err(|e| e.to_string())?;
     let tuple = explanation.info.to_string();
-    Ok(Analysis { explanation: Arc::new(explanation), strategy, feature, tuple, ms: crate::platform::now_ms() - t0 })
+    Ok(Analysis { explanation: Arc::new(explanation), strategy, feature, tuple, ms: 0.0 })
 }
 
 /// Index of the keypoint nearest to (x, y) in image coordinates (the first

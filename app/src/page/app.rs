@@ -145,7 +145,7 @@ pub fn url_state(views: Views) -> UrlState {
 /// the URL kept in step with every change (replaceState: no history spam).
 #[component]
 pub fn App() -> impl IntoView {
-    let views = Views::new();
+    let views = Views::with_lab(crate::model::lab::Lab::with_clock(crate::platform::now_ms));
     apply_url(views, &UrlState::from_query(&current_query()));
     Effect::new(move |_| {
         let q = url_state(views).to_query();

@@ -8,6 +8,9 @@ use js_sys::Object;
 use siftlab_mark::Pair;
 use wasm_bindgen::JsValue;
 
+/// The name the page gives the "Mark my code" worker (`www/mark-worker.js`).
+pub const MARK_WORKER_NAME: &str = "siftlab-mark";
+
 /// The pair's fields, added to the message object `o`.
 pub fn set_pair(o: &Object, pair: &Pair) {
     set(o, "pairId", &pair.id.into());

@@ -382,7 +382,7 @@ pub enum FrameSource {
 
 impl FrameSource {
     /// The number of frames, 0 … len − 1.
-    pub fn len(&self) -> usize {
+    pub fn frame_count(&self) -> usize {
         match self {
             FrameSource::Demo(n) => *n,
             FrameSource::Folder(files) => files.len(),

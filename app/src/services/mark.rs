@@ -9,7 +9,7 @@
 
 use crate::model::lab::Source;
 use crate::protocol::mark::set_pair;
-use crate::worker::MARK_WORKER_NAME;
+use crate::protocol::mark::MARK_WORKER_NAME;
 use siftlab_mark::{check_source, Limits, Marks, Outcome, Pair, Pairs, Session, Step};
 use std::cell::Cell;
 use std::cell::RefCell;

@@ -107,7 +107,7 @@ pub fn start(
         g.get()
     });
     let script = sift_pool::worker_script();
-    let total = source.len() as u32;
+    let total = source.frame_count() as u32;
     let mut started = Vec::with_capacity(trackers.len());
     for (k, &tracker) in trackers.iter().enumerate() {
         let handle = WorkerHandle::start(
@@ -119,7 +119,7 @@ pub fn start(
         handle.send(&Request::Odometry(VoRequest::Start { id: VO_ID, total, poses: poses.clone(), camera, tracker }));
         started.push(Running { handle, tracker, next: 0, busy: false, over: false });
     }
-    let n = source.len();
+    let n = source.frame_count();
     let run = Run {
         generation,
         source,

@@ -8,9 +8,6 @@ pub mod mark;
 pub mod odometry;
 pub mod sift;
 
-/// The name the page gives the "Mark my code" worker (`www/mark-worker.js`).
-pub const MARK_WORKER_NAME: &str = "siftlab-mark";
-
 use crate::protocol::{ready_js, Request};
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
@@ -24,7 +21,7 @@ pub fn start() {
     let scope: web_sys::DedicatedWorkerGlobalScope = js_sys::global().unchecked_into();
     // The "Mark my code" worker loads this build only for its matcher
     // ([`mark`]'s exports): its own script handles the messages.
-    if scope.name() == MARK_WORKER_NAME {
+    if scope.name() == crate::protocol::mark::MARK_WORKER_NAME {
         return;
     }
     let post_scope = scope.clone();

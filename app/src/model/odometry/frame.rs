@@ -180,6 +180,7 @@ mod tests {
             essential_inliers: 1200,
             pose_inliers: 1190,
             redetected: true,
+            points_out: 1500,
         };
         assert_eq!(
             counts_text(110, &c, true, 1500),
@@ -188,7 +189,7 @@ mod tests {
         );
         assert!(counts_text(110, &c, false, 0)
             .starts_with("frame 110: 1480 of 1500 (99 %) keypoints of the previous frame matched"));
-        let first = StepCounts { points_in: 0, tracked: 0, essential_inliers: 0, pose_inliers: 0, redetected: true };
+        let first = StepCounts { redetected: true, points_out: 1500, ..StepCounts::default() };
         assert_eq!(counts_text(0, &first, true, 1500), "frame 0: SIFT detected 1500 points to track");
     }
 

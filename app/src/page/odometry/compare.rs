@@ -45,7 +45,7 @@ fn start(ctx: Ctx) {
         u.resize(n, None);
     });
     let Some(inputs) = ctx.inputs.get_value() else { return };
-    let total = inputs.frames.len();
+    let total = inputs.frames.frame_count();
     // Which trackers are over (done or failed): the last one ends the comparison.
     let over = std::rc::Rc::new(std::cell::RefCell::new(vec![false; n]));
     let on_event = move |k: usize, m: VoReply| {
@@ -187,7 +187,7 @@ pub fn OdometryCompare(source: Signal<Source>, count: Signal<Result<u32, String>
                 {move || {
                     let done = ctx.results.with(|r| r.iter().any(|r| r.metrics.is_some()));
                     let note = done
-                        .then(|| ctx.inputs.with_value(|i| i.as_ref().and_then(|i| kitti_note_text(&i.poses, i.frames.len()))))
+                        .then(|| ctx.inputs.with_value(|i| i.as_ref().and_then(|i| kitti_note_text(&i.poses, i.frames.frame_count()))))
                         .flatten()?;
                     Some(view! {
                         <p class="small" data-testid="vo-compare-kitti">

@@ -86,7 +86,18 @@ pub fn OdometryView() -> impl IntoView {
     let started_ms = StoredValue::new(0.0f64);
     // Frames 0, 1, 2, … with no gap: the demo's 119, 120, 149, 150 are not part of it.
     let available = move || lab.source.with(|s| run_from_zero(s.frames()));
-    Effect::new(move |_| frame_text.set(available().saturating_sub(1).to_string()));
+    // Each source's last frame by default; but a FRAME_ID typed before the
+    // first source's frame list arrived (the demo's index) is the student's
+    // and stays.
+    let typed_early = StoredValue::new(false);
+    Effect::new(move |_| {
+        let n = available();
+        if typed_early.get_value() {
+            typed_early.set_value(n == 0);
+            return;
+        }
+        frame_text.set(n.saturating_sub(1).to_string());
+    });
 
     let run = move |_: ()| {
         let n = match vo_frame_count(&frame_text.get_untracked(), available()) {
@@ -189,7 +200,12 @@ pub fn OdometryView() -> impl IntoView {
                     </span>
                     <input type="number" min="1" class="num" data-testid="vo-frame-id"
                         prop:value=move || frame_text.get()
-                        on:input=move |ev| frame_text.set(event_target_value(&ev))/>
+                        on:input=move |ev| {
+                            if available() == 0 {
+                                typed_early.set_value(true);
+                            }
+                            frame_text.set(event_target_value(&ev));
+                        }/>
                 </label>
                 <label class="ctl">
                     <span>"tracker"</span>

@@ -189,8 +189,8 @@ fn resumed_loop_replays_each_frame() {
         let refs = run[j].detail.as_ref().unwrap().detected.clone();
         let mut replay = Odometry::resume(cam, Box::new(grid), j, &img(j), refs, Some(&poses[j])).unwrap();
         replay.min_points = odo.min_points;
-        for k in j + 1..i {
-            replay.step(&img(k), Some(&poses[k])).unwrap();
+        for (k, pose) in poses.iter().enumerate().take(i).skip(j + 1) {
+            replay.step(&img(k), Some(pose)).unwrap();
         }
         replay.record_detail = true;
         let got = replay.step(&img(i), Some(&poses[i])).unwrap();
