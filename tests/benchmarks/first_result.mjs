@@ -11,7 +11,8 @@ import { createRequire } from 'node:module';
 import fs from 'node:fs';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { ROOT, servePy, CHROMIUM_ARGS } from './vo_memory.mjs';
+import { ROOT, CHROMIUM_ARGS } from './vo_memory.mjs';
+import { serve } from '../e2e/harness.mjs';
 
 const require = createRequire(path.join(ROOT, 'tests/e2e/package.json'));
 const { chromium } = require('playwright-core');
@@ -41,7 +42,7 @@ async function once(base) {
   }
 }
 
-const servers = await Promise.all(dists.map((d) => servePy(d)));
+const servers = await Promise.all(dists.map((d) => serve(d, { hooks: false })));
 const times = dists.map(() => []);
 try {
   for (let r = 0; r < runs; r++) {
@@ -51,7 +52,7 @@ try {
     }
   }
 } finally {
-  servers.forEach((s) => s.close());
+  await Promise.all(servers.map((s) => s.close()));
 }
 const out = dists.map((d, k) => ({
   dist: d, page_wasm_gz: gz(path.join(d, 'pkg/siftlab_app_bg.wasm')), worker_wasm_gz: gz(path.join(d, 'pkg/siftlab_worker_bg.wasm')),

@@ -10,8 +10,8 @@
 //
 //   node tests/benchmarks/vo_memory.mjs --frames 4541 --dist /tmp/dist-before44
 //
-// Options: --frames N (4541), --dist DIR (ROOT/dist, served with www/serve.py as www/serve
-// does), --dir FOLDER (/tmp/siftlab-long-N, built by long_sequence.py when incomplete),
+// Options: --frames N (4541), --dist DIR (ROOT/dist, served by the e2e harness's server),
+// --dir FOLDER (/tmp/siftlab-long-N, built by long_sequence.py when incomplete),
 // --lanes 8|16 (OpenCV's SIMD width for page and CLI alike; default the host's, as the e2e
 // suite), --workers K (the page's ?workers=, default the page's own choice), --ate X (the
 // CLI's ATE when already known: skips the CLI run), --cli PATH, --samples FILE (every
@@ -19,13 +19,13 @@
 // together hold more than F of the machine's RAM, and report the growth per frame so far).
 // Output: a human summary on stderr, one JSON line on stdout.
 // The module also exports the pieces tests/e2e/vo-memory.test.mjs uses.
-import { spawn, spawnSync } from 'node:child_process';
+import { spawnSync } from 'node:child_process';
 import { createRequire } from 'node:module';
 import fs from 'node:fs';
-import net from 'node:net';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
+import { serve } from '../e2e/harness.mjs';
 
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const require = createRequire(path.join(ROOT, 'tests/e2e/package.json'));
@@ -246,29 +246,6 @@ export async function runVo(page, { base, dir, frames, lanes, workers, gc = fals
   return rec;
 }
 
-async function freePort() {
-  const s = net.createServer();
-  await new Promise((r) => s.listen(0, '127.0.0.1', r));
-  const { port } = s.address();
-  await new Promise((r) => s.close(r));
-  return port;
-}
-
-/** www/serve.py PORT DIST, as www/serve runs it; resolves once it answers. */
-export async function servePy(dist) {
-  const port = await freePort();
-  const proc = spawn('python3', [path.join(ROOT, 'www/serve.py'), String(port), dist], { stdio: 'ignore' });
-  const base = `http://127.0.0.1:${port}/`;
-  for (let i = 0; ; i++) {
-    try {
-      if ((await fetch(base)).ok) break;
-    } catch { /* not yet */ }
-    if (i > 100) throw new Error('www/serve.py did not start');
-    await sleep(100);
-  }
-  return { base, close: () => proc.kill() };
-}
-
 function parseArgs(argv) {
   const a = { frames: 4541, dist: path.join(ROOT, 'dist'), lanes: hostLanes(), stopFraction: 0.7, cli: process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab') };
   for (let i = 0; i < argv.length; i++) {
@@ -307,7 +284,7 @@ async function main() {
   }
   const ram = memTotalBytes();
   const { chromium } = require('playwright-core');
-  const server = await servePy(a.dist);
+  const server = await serve(a.dist, { hooks: false });
   const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium', args: CHROMIUM_ARGS });
   let rec;
   try {
@@ -317,7 +294,7 @@ async function main() {
     rec.workersText = await page.textContent(tid('vo-workers'), { timeout: 2000 }).catch(() => null);
   } finally {
     await browser.close().catch(() => {});
-    server.close();
+    await server.close();
   }
   if (a.samples) fs.writeFileSync(a.samples, rec.samples.map((s) => JSON.stringify(s)).join('\n') + '\n');
   const from = Math.min(200, Math.floor(rec.framesDone / 3));
