@@ -61,6 +61,8 @@ struct Run {
     /// look-ahead; `None` before they are read and after every tracker used them.
     bytes: Vec<Option<Rc<Vec<u8>>>>,
     slots: Vec<Slot>,
+    /// Frames below this are `Gone` and their files dropped.
+    released: usize,
     /// Frames asked of the SIFT workers so far, and how many are pending.
     requested: usize,
     pending: usize,
@@ -126,6 +128,7 @@ pub fn start(
         size,
         bytes: vec![None; n],
         slots: (0..n).map(|_| Slot::Pending).collect(),
+        released: 0,
         requested: 0,
         pending: 0,
         trackers: started,
@@ -183,10 +186,12 @@ fn feed(generation: u32) {
         }
         // Files and features no tracker needs any more.
         let slowest = run.trackers.iter().filter(|t| !t.over).map(|t| t.next).min().unwrap_or(n);
-        for i in 0..slowest.min(n) {
+        // From where the last call stopped: a long run calls this a few times a frame.
+        for i in run.released..slowest.min(n) {
             run.slots[i] = Slot::Gone;
             run.bytes[i] = None;
         }
+        run.released = run.released.max(slowest.min(n));
         let mut asks = Vec::new();
         while run.requested < n
             && run.pending < max_pending()
