@@ -11,9 +11,10 @@ Per fixture, in a fresh class folder under the system's temporary directory:
 the marker runs as `SIFTLAB -d DATASET mark student_a/vision_tasks.py -n N --seed S --json
 [--no-sandbox]` (cwd ROOT, its own session), with SIFTLAB_CANARY_FILE, SIFTLAB_CANARY_ENV (a
 second random token) and SIFTLAB_CANARY_PORT (a TCP listener of this script's, which also
-listens on 47011 when that port is free) in its environment. The script also plants a decoy
-marking folder, /tmp/siftlab-mark-0-hostilecheck-*/ with siftlab_harness.py and cv2.py, and
-/tmp/siftlab-canary-secret.txt (when absent). Then it checks:
+listens on 47011 when that port is free) in its environment, and TMPDIR set to a scratch folder
+of its own (where the marker makes its marking folder). The script also plants a decoy marking
+folder, /tmp/siftlab-mark-0-hostilecheck-*/ with siftlab_harness.py and cv2.py, and a canary
+/tmp/siftlab-canary-*.txt (both under fresh random names). Then it checks:
 
 - the marker exited with 0 or 1 before --timeout (default 600 s; a marker stopped with
   SIGSTOP for 10 s is killed and fails at once);
@@ -28,15 +29,21 @@ marking folder, /tmp/siftlab-mark-0-hostilecheck-*/ with siftlab_harness.py and 
   whose command line names the harness, the class folder or the fixture's sleeper, or
   whose environment holds the canary token). They are then killed;
 - nothing in the class folder changed (a new file beside the submission, the other
-  student's file rewritten...), the decoy is intact, no new or modified file at the top of
-  /tmp or of the account's home, nor in a /tmp/siftlab-* folder that existed before, and
-  the marker's own /tmp/siftlab-mark-<pid>-* folder is gone.
+  student's file rewritten...), the decoy is intact, no file of the fixtures' litter
+  (siftlab_pwned*) new or modified at the top of /tmp or of the account's home, and the
+  scratch folder is empty again (the marker's own siftlab-mark-<pid>-* folder is gone).
+  Only what this check made, and the fixtures' own litter, is watched: what else runs on
+  the machine and writes /tmp cannot fail it.
 
 Prints one PASS/FAIL line per fixture with the reasons, then a summary; exit status 1 when
 any fixture fails (2: nothing to run).
 
     python3 tests/security/hostile_check.py [NAME...] [--only NAME] [--siftlab PATH]
-        [--dataset DIR] [-n 2] [--seed 0] [--timeout 600] [--no-sandbox] [--keep] [-v]
+        [--dataset DIR] [-n N] [--seed 0] [--timeout 600] [--no-sandbox] [--keep] [-v]
+
+Each fixture runs at the smallest n that shows its attack (CALLS below: 1 call per task,
+2 for leak_secrets, whose matching_info leaks one way on odd calls and another on even
+ones); -n N runs every fixture at N instead.
 
 As a module: `hostile_check.check(name, **options) -> dict` (keys name, ok, reasons, total,
 max, exit, seconds, stdout, stderr, root), `fixtures()`, `max_marks()`. check() makes the
@@ -101,13 +108,9 @@ MAX_MARKS = {
     "memory_bomb": 20.0,
 }
 
-# Entries at the top of /tmp (and of the home folder) that other tools on a shared machine
-# create or touch; not the marking's doing.
-TMP_NOISE = re.compile(r"^(bash_jobs|bash_tool_|rustc|cargo|\.X11-unix|\.ICE-unix|\.font-unix|\.XIM-unix|"
-                       r"\.Test-unix|hsperfdata_|systemd-private-|snap-private-tmp|pip-|pytest-of-|"
-                       r"\.com\.google|\.org\.chromium|clr-debug-pipe|dotnet-diagnostic)")
-HOME_NOISE = re.compile(r"^\.(bash_history|python_history|lesshst|viminfo|wget-hsts|sudo_as_admin_successful|"
-                        r"node_repl_history|zsh_history)$")
+# Calls per task each fixture needs for its attack to show (others: 1). leak_secrets'
+# matching_info raises its secrets on odd calls and returns them on even ones.
+CALLS = {"leak_secrets": 2}
 OUR_LITTER = re.compile(r"^siftlab_pwned")
 STOP_LIMIT = 10.0  # seconds a stopped marker is waited for before it is killed
 OUTPUT_CAP = 64 << 20  # bytes of the marker's stdout / stderr kept
@@ -278,14 +281,9 @@ def _top(folder):
     return _tree(folder, depth=0)
 
 
-def _siftlab_dirs(top):
-    return [n for n, (kind, _, _) in top.items() if kind == "dir" and n.startswith("siftlab")]
-
-
-def _tmp_snapshot():
-    top = _top(TMP)
-    inner = {n: _tree(os.path.join(TMP, n), depth=3) for n in _siftlab_dirs(top)}
-    return top, inner
+def _litter(folder):
+    """The fixtures' litter (siftlab_pwned*) at the top of a folder: {name: (kind, mtime, size)}."""
+    return {n: v for n, v in _top(folder).items() if OUR_LITTER.match(n)}
 
 
 def _changed(before, after):
@@ -384,7 +382,7 @@ def _state(pid):
     return info[2] if info else None
 
 
-def check(name, siftlab=None, dataset=None, n=2, seed=0, no_sandbox=False, timeout=600.0, keep=False,
+def check(name, siftlab=None, dataset=None, n=None, seed=0, no_sandbox=False, timeout=600.0, keep=False,
           max_total=None, log=None):
     """Marks fixture `name` and checks the marker held. Returns {"name", "ok", "reasons",
     "total", "max", "exit", "seconds", "stdout", "stderr", "root"}."""
@@ -417,16 +415,15 @@ def check(name, siftlab=None, dataset=None, n=2, seed=0, no_sandbox=False, timeo
     canary = os.path.join(root, "siftlab-canary-secret.txt")
     with open(canary, "w") as f:
         f.write(file_token + "\n")
-    made = {os.path.basename(root)}
-    tmp_canary = os.path.join(TMP, "siftlab-canary-secret.txt")
-    if not os.path.lexists(tmp_canary):
-        with open(tmp_canary, "w") as f:
-            f.write(file_token + "\n")
-        made.add(os.path.basename(tmp_canary))
-    else:
-        tmp_canary = None
+    # A canary in the host's /tmp (leak_secrets looks for /tmp/siftlab-canary-*.txt) and a decoy
+    # marking folder there (outlive's daemon edits /tmp/siftlab-* folders): fresh random names,
+    # so that concurrent checks and other programs never meet them.
+    fd, tmp_canary = tempfile.mkstemp(prefix="siftlab-canary-", suffix=".txt", dir=TMP)
+    with os.fdopen(fd, "w") as f:
+        f.write(file_token + "\n")
     decoy = tempfile.mkdtemp(prefix="siftlab-mark-0-hostilecheck-", dir=TMP)
-    made.add(os.path.basename(decoy))
+    # The marker's TMPDIR: its marking folder goes here, and must be gone at the end.
+    scratch = tempfile.mkdtemp(prefix="siftlab-hostile-tmp-%s-" % name)
     for fname in ("siftlab_harness.py", "cv2.py"):
         src = os.path.join(REPO, "www", "py", fname)
         if os.path.isfile(src):
@@ -445,7 +442,10 @@ def check(name, siftlab=None, dataset=None, n=2, seed=0, no_sandbox=False, timeo
 
     env = dict(os.environ)
     env.update(SIFTLAB_CANARY_FILE=canary, SIFTLAB_CANARY_ENV=env_token,
-               SIFTLAB_CANARY_PORT=str(listeners[0].port))
+               SIFTLAB_CANARY_PORT=str(listeners[0].port), TMPDIR=scratch)
+    if n is None:
+        n = CALLS.get(name, 1)
+    result["n"] = n
     cmd = [siftlab, "-d", dataset, "mark", os.path.join("student_a", "vision_tasks.py"), "-n", str(n),
            "--seed", str(seed), "--json"]
     if no_sandbox:
@@ -459,8 +459,8 @@ def check(name, siftlab=None, dataset=None, n=2, seed=0, no_sandbox=False, timeo
                 homes.append(h)
         before_procs = _processes()
         before_tree = _tree(root)
-        before_tmp, before_tmp_inner = _tmp_snapshot()
-        before_homes = {h: _top(h) for h in homes}
+        before_tmp = _litter(TMP)
+        before_homes = {h: _litter(h) for h in homes}
 
         out, err = bytearray(), bytearray()
         t0 = time.time()
@@ -552,38 +552,18 @@ def check(name, siftlab=None, dataset=None, n=2, seed=0, no_sandbox=False, timeo
         edited = sorted(r for r in set(after_decoy) | set(decoy_tree) if after_decoy.get(r) != decoy_tree.get(r))
         if edited:
             reasons.append("the decoy marking folder %s was edited: %s" % (decoy, ", ".join(edited)))
-        after_tmp, _ = _tmp_snapshot()
-        ours = re.compile(r"^siftlab-mark-%d-" % proc.pid)
-        tmp_bad = []
-        for name_, what in _changed(before_tmp, after_tmp):
-            if name_ in made or TMP_NOISE.match(name_):
-                continue
-            if ours.match(name_):
-                tmp_bad.append("%s (the marker's folder, left behind)" % name_)
-                litter.append(os.path.join(TMP, name_))
-                continue
-            if what == "new" and re.match(r"^siftlab-(mark-\d+-|hostile-)", name_):
-                continue  # another marking's folder (a concurrent run)
-            tmp_bad.append("%s (%s)" % (name_, what))
-            if OUR_LITTER.match(name_):
-                litter.append(os.path.join(TMP, name_))
-        for d, inner in sorted(before_tmp_inner.items()):
-            if d in made or not os.path.isdir(os.path.join(TMP, d)):
-                continue
-            for rel, what in _changed(inner, _tree(os.path.join(TMP, d), depth=3)):
-                tmp_bad.append("%s/%s (%s)" % (d, rel, what))
+        tmp_bad = ["%s (%s)" % c for c in _changed(before_tmp, _litter(TMP))]
+        litter += [os.path.join(TMP, name_) for name_, _ in _changed(before_tmp, _litter(TMP))]
+        left = sorted(_tree(scratch, depth=0))
+        if left:
+            tmp_bad.append("the marker's TMPDIR still holds %s" % ", ".join(left[:3]))
         if tmp_bad:
             reasons.append("/tmp: %s" % ", ".join(tmp_bad[:6]))
         for home, before_home in before_homes.items():
-            home_bad = []
-            for name_, what in _changed(before_home, _top(home)):
-                if HOME_NOISE.match(name_):
-                    continue
-                home_bad.append("%s (%s)" % (name_, what))
-                if OUR_LITTER.match(name_):
-                    litter.append(os.path.join(home, name_))
+            home_bad = _changed(before_home, _litter(home))
             if home_bad:
-                reasons.append("%s: %s" % (home, ", ".join(home_bad[:6])))
+                reasons.append("%s: %s" % (home, ", ".join("%s (%s)" % c for c in home_bad[:6])))
+                litter += [os.path.join(home, name_) for name_, _ in home_bad]
 
         # Secrets, network.
         for label, token in (("canary file", file_token), ("canary environment variable", env_token)):
@@ -643,11 +623,11 @@ def check(name, siftlab=None, dataset=None, n=2, seed=0, no_sandbox=False, timeo
                 except OSError:
                     pass
         shutil.rmtree(decoy, ignore_errors=True)
-        if tmp_canary:
-            try:
-                os.unlink(tmp_canary)
-            except OSError:
-                pass
+        shutil.rmtree(scratch, ignore_errors=True)
+        try:
+            os.unlink(tmp_canary)
+        except OSError:
+            pass
         if not keep:
             shutil.rmtree(root, ignore_errors=True)
     result["ok"] = not reasons
@@ -659,8 +639,8 @@ def check(name, siftlab=None, dataset=None, n=2, seed=0, no_sandbox=False, timeo
 def line(r):
     total = "-" if r["total"] is None else "%.2f" % r["total"]
     limit = "?" if r["max"] is None else "%g" % r["max"]
-    head = "%s %-16s total %6s / max %-5s exit %-4s %6ss" % (
-        "PASS" if r["ok"] else "FAIL", r["name"], total, limit,
+    head = "%s %-16s n %d total %6s / max %-5s exit %-4s %6ss" % (
+        "PASS" if r["ok"] else "FAIL", r["name"], r.get("n") or 0, total, limit,
         "-" if r["exit"] is None else r["exit"], "-" if r["seconds"] is None else r["seconds"])
     if r["ok"]:
         return head
@@ -674,7 +654,8 @@ def main(argv=None):
     ap.add_argument("--only", action="append", default=[], metavar="NAME", help="a fixture to run (repeatable)")
     ap.add_argument("--siftlab", default=DEFAULT_SIFTLAB, help="the siftlab binary (default: $SIFTLAB or %(default)s)")
     ap.add_argument("--dataset", default=DEFAULT_DATASET, help="default: %(default)s")
-    ap.add_argument("-n", type=int, default=2, help="calls per task (default: %(default)s)")
+    ap.add_argument("-n", type=int, default=None,
+                    help="calls per task for every fixture (default: each fixture's own, CALLS)")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--timeout", type=float, default=600.0, help="seconds before the marker is killed (a failure)")
     ap.add_argument("--no-sandbox", action="store_true", help="pass --no-sandbox to siftlab mark")
