@@ -165,7 +165,8 @@ fn a_whole_class() {
     let students = class(&all, |_| true);
     assert!(students.len() >= 40, "{}", students.len());
     let t0 = Instant::now();
-    let two = run(&mut siftlab(&[all.to_str().unwrap(), "--out", &o("jobs2"), "--jobs", "2", "-n", "1", "--seed", "5"], &ds));
+    let two =
+        run(&mut siftlab(&[all.to_str().unwrap(), "--out", &o("jobs2"), "--jobs", "2", "-n", "1", "--seed", "5"], &ds));
     let two_s = t0.elapsed().as_secs_f64();
     assert_eq!(two.status.code(), Some(0), "{}", text(&two.stderr));
     let whole = rows(&fs::read_to_string(root.join("jobs2/grades.csv")).unwrap());
