@@ -7,12 +7,20 @@
 # each running every case of the app's files (app/*.test.mjs, one file per view, helpers in
 # app/common.mjs; one node --test run, so one count of cases) over W3C WebDriver
 # (harness.mjs), checked against the native CLI, and the accessibility checks (a11y.test.mjs:
-# axe-core, 390 px, colour-vision screenshots); then Playwright's Chromium-only extras
+# axe-core, 390 px, colour-vision screenshots); and in Chromium, Playwright's extras
 # (chromium-extras.test.mjs), the worker counts (workers.test.mjs: workers=1, 2, 3, 8 give
 # the CLI's poses) and the odometry's memory over 600 frames (vo-memory.test.mjs).
 #   E2E_ENGINES="chromium webkit" tests/e2e/run.sh      a subset of engines
+#   E2E_LANES=1 tests/e2e/run.sh                        one suite at a time
+# Two lanes run side by side by default (Chromium's suites in one; Firefox's, then WebKit's in
+# the other): a browser waits on its page, its server and its driver for much of a case, so
+# two share a 2-core machine well. Nothing a case checks depends on it: results are compared
+# with the CLI's, and "Mark my code" scales its time limits by the speed it measures.
 # Installs the npm packages and builds what is missing (dist/, the CLI). Screenshots and
-# measured figures land in tests/e2e/screenshots/<engine>/ (gitignored).
+# measured figures land in tests/e2e/screenshots/<engine>/ (gitignored). E2E_SUMMARY, if set,
+# names a file that gets one line per suite: "suite<TAB>engine<TAB>seconds<TAB>cases<TAB>passed".
+# One block, read whole before it runs (an edit during a run cannot change it).
+{
 set -euo pipefail
 
 HERE="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
@@ -38,58 +46,94 @@ fi
 
 cd "$HERE"
 ENGINES="${E2E_ENGINES:-chromium firefox webkit}"
-SUMMARY=""
-STATUS=0
-for engine in $ENGINES; do
-    launcher=()
+LANES="${E2E_LANES:-2}"
+WORK="$(mktemp -d "${TMPDIR:-/tmp}/siftlab-e2e.XXXXXX")"
+trap 'rm -rf "$WORK"' EXIT
+SUMMARY="$WORK/summary.tsv"
+: > "$SUMMARY"
+
+# suite ENGINE NAME FILES...: one node --test run; its lines prefixed with "[engine name]",
+# its count of cases and seconds appended to the summary. Fails when a case fails or is skipped.
+suite() {
+    local engine="$1" name="$2"
+    shift 2
+    local launcher=() log="$WORK/$engine-${name//\//}.log" start rc tests pass skipped
     # MiniBrowser is a GTK window: it needs an X display even for automation.
     if [ "$engine" = webkit ] && [ -z "${DISPLAY:-}" ]; then launcher=(xvfb-run -a -s "-screen 0 1600x6200x24"); fi
-    for suite in app/ a11y.test.mjs; do
-        echo "[e2e] === $engine: $suite" >&2
-        files=("$suite")
-        if [ "$suite" = app/ ]; then
-            files=(app/*.test.mjs)
-            # Each app file adds its figures to the engine's metrics.json: start it afresh.
-            rm -f "screenshots/$engine/metrics.json"
-        fi
-        start=$(date +%s)
-        log="$(mktemp)"
-        set +e
-        E2E_ENGINE="$engine" "${launcher[@]}" node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 "${files[@]}" 2>&1 | tee "$log"
-        rc=${PIPESTATUS[0]}
-        set -e
-        tests=$(grep -aoE '^ℹ tests [0-9]+' "$log" | awk '{print $3}' | tail -1)
-        pass=$(grep -aoE '^ℹ pass [0-9]+' "$log" | awk '{print $3}' | tail -1)
-        # Nothing may be skipped or left to do: every engine runs every case.
-        skipped=$(grep -aoE '^ℹ (skipped|todo) [0-9]+' "$log" | awk '{s += $3} END {print s + 0}')
-        if [ "$skipped" -ne 0 ]; then
-            echo "[e2e] $engine $suite: $skipped cases skipped or todo" >&2
-            rc=1
-        fi
-        rm -f "$log"
-        SUMMARY+="$(printf '%-14s %-9s %3s cases, %3s passed, %4ds' "$suite" "$engine" "${tests:-?}" "${pass:-?}" "$(( $(date +%s) - start ))")"$'\n'
-        [ "$rc" -eq 0 ] || STATUS=1
-    done
-done
+    echo "[e2e] === $engine: $name" >&2
+    # Each app file adds its figures to the engine's metrics.json: start it afresh.
+    if [ "$name" = app/ ]; then rm -f "screenshots/$engine/metrics.json"; fi
+    start=$(date +%s)
+    set +e
+    E2E_ENGINE="$engine" "${launcher[@]}" node --test --test-reporter=spec --test-concurrency=1 \
+        --test-timeout=1800000 "$@" > >(tee "$log" | sed -u "s/^/[$engine ${name%/}] /") 2>&1
+    rc=$?
+    set -e
+    sleep 0.2 # the tee has the last lines
+    tests=$(grep -aoE '^ℹ tests [0-9]+' "$log" | awk '{print $3}' | tail -1)
+    pass=$(grep -aoE '^ℹ pass [0-9]+' "$log" | awk '{print $3}' | tail -1)
+    # Nothing may be skipped or left to do: every engine runs every case.
+    skipped=$(grep -aoE '^ℹ (skipped|todo) [0-9]+' "$log" | awk '{s += $3} END {print s + 0}')
+    if [ "$skipped" -ne 0 ]; then
+        echo "[e2e] $engine $name: $skipped cases skipped or todo" >&2
+        rc=1
+    fi
+    printf '%s\t%s\t%d\t%s\t%s\n' "$name" "$engine" "$(( $(date +%s) - start ))" "${tests:-?}" "${pass:-?}" >> "$SUMMARY"
+    return "$rc"
+}
 
-if [[ " $ENGINES " == *" chromium "* ]]; then
-    echo "[e2e] === chromium (Playwright): chromium-extras.test.mjs" >&2
-    node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 chromium-extras.test.mjs || STATUS=1
-    # workers=1, 2, 3, 8: the odometry's and the comparison's poses equal the CLI's.
-    echo "[e2e] === chromium (Playwright): workers.test.mjs" >&2
-    node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 workers.test.mjs || STATUS=1
-    # A 600-frame folder: the renderer's memory does not grow with the run's length.
-    echo "[e2e] === chromium (Playwright): vo-memory.test.mjs" >&2
-    node --test --test-reporter=spec --test-concurrency=1 --test-timeout=1800000 vo-memory.test.mjs || STATUS=1
-fi
+# An engine's suites, in order; every one runs even when an earlier one failed.
+engine_chain() {
+    local engine="$1" rc=0
+    suite "$engine" app/ app/*.test.mjs || rc=1
+    suite "$engine" a11y.test.mjs a11y.test.mjs || rc=1
+    if [ "$engine" = chromium ]; then
+        # What WebDriver cannot see (Playwright, Chromium only); workers=1, 2, 3, 8: the
+        # odometry's and the comparison's poses equal the CLI's; a 600-frame folder: the
+        # renderer's memory does not grow with the run's length.
+        suite chromium extras chromium-extras.test.mjs || rc=1
+        suite chromium workers workers.test.mjs || rc=1
+        suite chromium vo-memory vo-memory.test.mjs || rc=1
+    fi
+    return "$rc"
+}
+
+# The lanes: Chromium (the longest chain) in one, the other engines in turn in the other.
+declare -a LANE_OF=()
+i=0
+for engine in $ENGINES; do
+    if [ "$LANES" -le 1 ]; then LANE_OF+=("0 $engine"); else
+        case "$engine" in chromium) LANE_OF+=("0 $engine") ;; *) LANE_OF+=("1 $engine") ;; esac
+    fi
+    i=$((i + 1))
+done
+run_lane() {
+    local lane="$1" rc=0 entry
+    for entry in "${LANE_OF[@]}"; do
+        [ "${entry%% *}" = "$lane" ] || continue
+        engine_chain "${entry#* }" || rc=1
+    done
+    return "$rc"
+}
+STATUS=0
+pids=()
+for lane in 0 1; do
+    run_lane "$lane" &
+    pids+=($!)
+done
+for p in "${pids[@]}"; do wait "$p" || STATUS=1; done
 
 echo "[e2e] per engine:" >&2
-printf '%s' "$SUMMARY" >&2
+while IFS=$'\t' read -r name engine secs tests pass; do
+    printf '%-14s %-9s %3s cases, %3s passed, %4ds\n' "$name" "$engine" "$tests" "$pass" "$secs" >&2
+done < "$SUMMARY"
+if [ -n "${E2E_SUMMARY:-}" ]; then cat "$SUMMARY" >> "$E2E_SUMMARY"; fi
 # The same cases in every engine: a count that differs means a case was skipped somewhere.
-for suite in app/ a11y.test.mjs; do
-    if [ "$(printf '%s' "$SUMMARY" | awk -v s="$suite" '$1 == s {print $3}' | sort -u | wc -l)" -gt 1 ]; then
-        echo "[e2e] $suite: the engines ran different numbers of cases" >&2
+for s in app/ a11y.test.mjs; do
+    if [ "$(awk -F'\t' -v s="$s" '$1 == s {print $4}' "$SUMMARY" | sort -u | wc -l)" -gt 1 ]; then
+        echo "[e2e] $s: the engines ran different numbers of cases" >&2
         STATUS=1
     fi
 done
 exit "$STATUS"
+}
