@@ -163,8 +163,9 @@ fn a_whole_class() {
         .spawn()
         .unwrap();
     let deadline = Instant::now() + Duration::from_secs(600);
-    let done =
-        |p: &Path| fs::read_dir(p).map(|r| r.flatten().filter(|e| e.path().join("report.json").exists()).count());
+    let done = |p: &Path| {
+        fs::read_dir(p.join("students")).map(|r| r.flatten().filter(|e| e.path().join("report.json").exists()).count())
+    };
     while done(Path::new(&out)).unwrap_or(0) < students.len() / 2 && Instant::now() < deadline {
         std::thread::sleep(Duration::from_millis(200));
     }
@@ -213,7 +214,7 @@ fn a_whole_class() {
 
     // Gradescope's results.json: the fields the autograder format asks for.
     for id in ["s_inverted", "z_syntax", "no_file"] {
-        let r = fs::read_to_string(root.join("jobs1").join(id).join("results.json")).unwrap();
+        let r = fs::read_to_string(root.join("jobs1/students").join(id).join("results.json")).unwrap();
         let j = json::parse(&r).unwrap();
         for k in ["score", "max_score", "output", "tests"] {
             assert!(j.get(k).is_some(), "{id}: no {k}: {r}");
@@ -232,7 +233,7 @@ fn a_whole_class() {
                 assert!(t.get(k).is_some(), "{id}: a test without {k}: {r}");
             }
         }
-        assert!(fs::read_to_string(root.join("jobs1").join(id).join("report.txt")).unwrap().starts_with(id));
+        assert!(fs::read_to_string(root.join("jobs1/students").join(id).join("report.txt")).unwrap().starts_with(id));
     }
     let _ = fs::remove_dir_all(&root);
 }
