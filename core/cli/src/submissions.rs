@@ -309,7 +309,7 @@ pub fn read_submission(path: &Path, limit: usize, follow: bool) -> Result<Source
         .open(path)
         .map_err(|e| match e.raw_os_error() {
             Some(libc::ELOOP) => why::SYMLINK.to_string(),
-            _ => format!("{}: {}", why::UNREADABLE, e.kind()),
+            _ => format!("{}: {e}", why::UNREADABLE),
         })?;
     let meta = f.metadata().map_err(|e| format!("{}: {}", why::UNREADABLE, e.kind()))?;
     if !meta.is_file() {

@@ -320,6 +320,21 @@ fn a_hostile_class() {
     let (r, code) = fx.mark("subs", &args, &[ok("broken"), ok("good"), ok("mallory")]);
     assert_eq!(code, Some(0));
     assert!(Fx::total(&r, "mallory") <= honest);
+    // One submission folder (Gradescope's): a link or a FIFO found in it is
+    // refused by name, at once, and no results.json claims a mark.
+    let g = fx.root.join("gradescope");
+    fs::create_dir_all(g.join("sub/lab")).unwrap();
+    symlink(&fx.key_file, g.join("sub/vision_tasks.py")).unwrap();
+    assert!(Command::new("mkfifo").arg(g.join("sub/lab/vision_tasks.py")).status().unwrap().success());
+    for (folder, says) in [(g.join("sub"), "refused (symlink)"), (g.join("sub/lab"), "refused (special file: a FIFO)")]
+    {
+        let results = g.join("results.json");
+        let o = siftlab(&fx.ds, &[&folder], &["-n", "1", "--gradescope", results.to_str().unwrap()]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains(says) && !err.contains(&fx.secret), "{err}");
+        assert!(!results.exists());
+    }
     // Nothing outside the submission tree was read: the key file's access time has not moved.
     use std::os::unix::fs::MetadataExt;
     assert_eq!(fs::metadata(&fx.key_file).unwrap().atime(), 946_684_800, "the key file was read");
