@@ -375,6 +375,13 @@ fn resume_trusts_only_siftlab() {
     assert_eq!(err.matches("kept from an earlier run").count(), 1, "only good's record is siftlab's: {err}");
     assert_eq!(rows(&out), first, "the forged records were marked anew");
 
+    // A key others can read is no secret: --resume refuses to trust it.
+    fs::set_permissions(out.join(".siftlab-key"), fs::Permissions::from_mode(0o644)).unwrap();
+    let o = siftlab(&fx.ds, &[&c], &[&["--out", out.to_str().unwrap(), "--resume"][..], &MARK].concat());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains(".siftlab-key: owned by uid") && err.contains("not yours with 0600"), "{err}");
+
     // A student's folder as --out (where a planted report.json would be
     // read), or the class inside --out: refused before anything is written.
     let mut before = BTreeMap::new();
