@@ -7,14 +7,16 @@
 //! once per run and shared by the jobs; each job marks one student at a time
 //! in a sandbox of its own (its own uid, so one student's processes never
 //! count against another's limit). Each student's files are written
-//! atomically when that student is done; grades.csv at the end.
+//! atomically when that student is done, under `DIR/students/<id>/`;
+//! grades.csv at the end, a row for every entry found (refusals included).
 
 use crate::args::{Cli, MarkArgs};
 use crate::mark::{frame_ids, frame_pairs, Runner};
 use crate::report_files::{atomic_write, gradescope_json, Row, Status};
-use crate::submissions::{discover, Student};
+use crate::seal::{check_apart, Seal, SEAL_FILE};
+use crate::submissions::{checked, discover, read_submission, Entry, Student};
 use siftlab_core::error::{Error, Result};
-use siftlab_mark::{check_source, escaped, parse_json, plan, report_json, report_text, Json, Marks, Pair};
+use siftlab_mark::{escaped, parse_json, plan, report_json, report_text, Json, Marks, Pair, MAX_SOURCE_BYTES};
 use std::collections::BTreeMap;
 use std::io::IsTerminal;
 use std::path::Path;
@@ -41,11 +43,18 @@ struct RunKey {
     frames: Vec<u32>,
 }
 
-/// `siftlab mark SUBMISSIONS... --out DIR`: exit 0 when every student is
-/// marked, 1 when some failed, 2 when the class cannot be marked at all.
+/// The folder of student `id`'s files in `out`: under students/, so no id
+/// (`grades.csv` from a file grades.csv.py) names a class-level file.
+pub fn student_dir(out: &Path, id: &str) -> std::path::PathBuf {
+    out.join("students").join(id)
+}
+
+/// `siftlab mark SUBMISSIONS... --out DIR`: exit 0 when every entry is
+/// marked, 1 when some failed or were refused, 2 when the class cannot be
+/// marked at all.
 pub fn run(cli: &Cli, a: &MarkArgs, out: &Path) -> i32 {
     match run_class(cli, a, out) {
-        Ok(rows) if rows.iter().all(|r| r.status != Status::Failed) => 0,
+        Ok(rows) if rows.iter().all(Row::marked) => 0,
         Ok(_) => 1,
         Err(e) => {
             eprintln!("siftlab: error: {e}");
@@ -55,16 +64,27 @@ pub fn run(cli: &Cli, a: &MarkArgs, out: &Path) -> i32 {
 }
 
 fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
-    let (mut students, refused) = discover(&a.files);
-    for (name, why) in &refused {
-        eprintln!("siftlab: refused {name}: {why}");
-    }
+    check_apart(out, &a.files)?;
+    let mut entries = discover(&a.files);
     if let Some(s) = &a.shard {
         let (i, k) = parse_shard(s)?;
-        students = students.into_iter().enumerate().filter(|(j, _)| j % k == i - 1).map(|(_, s)| s).collect();
+        entries = entries.into_iter().enumerate().filter(|(j, _)| j % k == i - 1).map(|(_, e)| e).collect();
     }
-    std::fs::create_dir_all(out)
+    let mut rows: BTreeMap<(Vec<u8>, Vec<u8>), Row> = BTreeMap::new();
+    let mut students = Vec::new();
+    for e in entries {
+        match e {
+            Entry::Student(s) => students.push(s),
+            Entry::Refused(r) => {
+                eprintln!("siftlab: refused {}: {}", r.name, r.reason);
+                let row = Row::refused(&r.name, &r.reason);
+                rows.insert(row.key(), row);
+            }
+        }
+    }
+    std::fs::create_dir_all(out.join("students"))
         .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", out.display())))?;
+    let seal = Seal::open(out)?;
     let n = a.n as usize;
     let ds = crate::common::open_dataset(cli)?;
     let frames = frame_ids(&ds)?;
@@ -84,13 +104,12 @@ fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
         pairs.len(),
         t0.elapsed().as_secs_f64()
     );
-    let mut rows: BTreeMap<String, Row> = BTreeMap::new();
     let mut todo = Vec::new();
     for s in students {
-        match a.resume.then(|| resumed(out, &s, &key)).flatten() {
+        match a.resume.then(|| resumed(out, &s, &key, &seal)).flatten() {
             Some(row) => {
                 eprintln!("{}: {:.2} ({}), kept from an earlier run", row.student, row.total, row.status_text());
-                rows.insert(row.student.clone(), row);
+                rows.insert(row.key(), row);
             }
             None => todo.push(s),
         }
@@ -102,11 +121,11 @@ fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
     let terminal = std::io::stderr().is_terminal();
     std::thread::scope(|scope| {
         for job in 0..jobs.min(total.max(1)) {
-            let (tx, next, todo, runner, pairs, key) = (tx.clone(), &next, &todo, &runner, &pairs, &key);
+            let (tx, next, todo, runner, pairs, key, seal) = (tx.clone(), &next, &todo, &runner, &pairs, &key, &seal);
             scope.spawn(move || loop {
                 let i = next.fetch_add(1, Ordering::SeqCst);
                 let Some(s) = todo.get(i) else { break };
-                let row = mark_student(s, out, runner, pairs, key, job as u32);
+                let row = mark_student(s, out, runner, pairs, (key, seal), job as u32);
                 if tx.send(row).is_err() {
                     break;
                 }
@@ -121,14 +140,15 @@ fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
                 line.push_str(&format!(", about {} left", minutes(left)));
             }
             eprintln!("{line}");
-            rows.insert(row.student.clone(), row);
+            rows.insert(row.key(), row);
         }
     });
     let rows: Vec<Row> = rows.into_values().collect();
     atomic_write(&out.join("grades.csv"), Row::csv(&rows).as_bytes())?;
     let failed = rows.iter().filter(|r| r.status == Status::Failed).count();
+    let refused = rows.iter().filter(|r| r.status == Status::Refused).count();
     eprintln!(
-        "grades: {} ({} student(s), {failed} failed) in {:.1} s",
+        "grades: {} ({} row(s), {failed} failed, {refused} refused) in {:.1} s",
         out.join("grades.csv").display(),
         rows.len(),
         t0.elapsed().as_secs_f64()
@@ -145,13 +165,16 @@ fn minutes(secs: f64) -> String {
     }
 }
 
-/// The row of a report.json written by a run with the same key, for the
-/// same file, by this siftlab.
-fn resumed(out: &Path, s: &Student, key: &RunKey) -> Option<Row> {
-    let text = std::fs::read_to_string(out.join(&s.id).join("report.json")).ok()?;
-    let j = parse_json(&text).ok()?;
+/// The row of a report.json this `--out`'s key sealed for this student,
+/// written by a run with the same key, for the same file, by this siftlab.
+fn resumed(out: &Path, s: &Student, key: &RunKey, seal: &Seal) -> Option<Row> {
+    let bytes = seal.verified(&s.id, &student_dir(out, &s.id))?;
+    let j = parse_json(std::str::from_utf8(&bytes).ok()?).ok()?;
     let str_of = |k: &str| j.get(k).and_then(Json::as_str).map(str::to_string);
-    let sha = s.file.as_ref().and_then(|f| std::fs::read(f).ok()).map(|b| crate::report_files::sha256_hex(&b));
+    let sha = match &s.file {
+        Some(f) => Some(crate::report_files::sha256_hex(&read_submission(f, MAX_SOURCE_BYTES, false).ok()?.bytes)),
+        None => None,
+    };
     let same = j.get("seed").and_then(Json::as_i64).map(|v| v as u64) == Some(key.seed)
         && j.get("cases_per_task").and_then(Json::as_i64) == Some(key.n as i64)
         && str_of("dataset").as_deref() == Some(key.dataset.as_str())
@@ -161,17 +184,32 @@ fn resumed(out: &Path, s: &Student, key: &RunKey) -> Option<Row> {
     (same && row.status != Status::Failed).then_some(row)
 }
 
-/// Marks one student and writes its three files; the row for grades.csv.
-fn mark_student(s: &Student, out: &Path, runner: &Runner, pairs: &[Pair], key: &RunKey, job: u32) -> Row {
-    let dir = out.join(&s.id);
+/// Marks one student and writes its files (its seal first, report.json
+/// last: a report.json there is a student done); the row for grades.csv.
+fn mark_student(
+    s: &Student,
+    out: &Path,
+    runner: &Runner,
+    pairs: &[Pair],
+    (key, seal): (&RunKey, &Seal),
+    job: u32,
+) -> Row {
+    let dir = student_dir(out, &s.id);
+    // Read as the tree was found: no link followed, no FIFO waited on, at
+    // most the size limit + 1 bytes; else the entry is refused, unmarked.
+    let source = match &s.file {
+        None => None,
+        Some(file) => match read_submission(file, MAX_SOURCE_BYTES, false) {
+            Ok(src) => Some(src),
+            Err(reason) => return Row::refused(&s.id, &reason),
+        },
+    };
     let result = (|| -> Result<(Marks, Status, String, String)> {
-        let Some(file) = &s.file else {
+        let Some(src) = &source else {
             return Ok((Marks::new(key.seed, key.n, Vec::new()), Status::Zero, "none found".into(), String::new()));
         };
-        let bytes =
-            std::fs::read(file).map_err(|e| Error::InvalidArgument(format!("cannot read {}: {e}", file.display())))?;
-        let sha = crate::report_files::sha256_hex(&bytes);
-        let marks = match check_source(&bytes) {
+        let sha = crate::report_files::sha256_hex(&src.bytes);
+        let marks = match checked(src) {
             Err(r) => Marks::rejected(key.seed, key.n, r),
             Ok(source) => runner.mark_quietly(source, key.seed, key.n, &key.frames, pairs, job)?,
         };
@@ -205,9 +243,10 @@ fn mark_student(s: &Student, out: &Path, runner: &Runner, pairs: &[Pair], key: &
         _ => text.push_str(&report_text(&marks)),
     }
     let files = [
-        ("report.json", json),
+        (SEAL_FILE, seal.tag(&s.id, json.as_bytes())),
         ("report.txt", text.clone()),
         ("results.json", gradescope_json(&marks, &text, s.file.is_none())),
+        ("report.json", json),
     ];
     let written = std::fs::create_dir_all(&dir)
         .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", dir.display())))
@@ -221,13 +260,13 @@ fn mark_student(s: &Student, out: &Path, runner: &Runner, pairs: &[Pair], key: &
 /// `siftlab mark --merge DIR... --out DIR`: the shards' grades.csv as one.
 pub fn merge(a: &MarkArgs, out: &Path) -> i32 {
     let run = || -> Result<Vec<Row>> {
-        let mut rows: BTreeMap<String, Row> = BTreeMap::new();
+        let mut rows: BTreeMap<(Vec<u8>, Vec<u8>), Row> = BTreeMap::new();
         for dir in &a.files {
             let path = dir.join("grades.csv");
             let text = std::fs::read_to_string(&path)
                 .map_err(|e| Error::InvalidArgument(format!("cannot read {}: {e}", path.display())))?;
             for row in Row::parse_csv(&text).map_err(|e| Error::InvalidArgument(format!("{}: {e}", path.display())))? {
-                if let Some(old) = rows.get(&row.student) {
+                if let Some(old) = rows.get(&row.key()) {
                     if *old != row {
                         return Err(Error::InvalidArgument(format!(
                             "{} is in two shards with different marks",
@@ -235,7 +274,7 @@ pub fn merge(a: &MarkArgs, out: &Path) -> i32 {
                         )));
                     }
                 }
-                rows.insert(row.student.clone(), row);
+                rows.insert(row.key(), row);
             }
         }
         let rows: Vec<Row> = rows.into_values().collect();
@@ -246,7 +285,7 @@ pub fn merge(a: &MarkArgs, out: &Path) -> i32 {
         Ok(rows)
     };
     match run() {
-        Ok(rows) if rows.iter().all(|r| r.status != Status::Failed) => 0,
+        Ok(rows) if rows.iter().all(Row::marked) => 0,
         Ok(_) => 1,
         Err(e) => {
             eprintln!("siftlab: error: {e}");

@@ -14,6 +14,7 @@ pub mod mark;
 pub mod match_all;
 mod report_files;
 mod sandbox;
+mod seal;
 mod submissions;
 pub mod trajectory;
 pub mod visual;

@@ -16,8 +16,8 @@ use siftlab_core::dataset::Dataset;
 use siftlab_core::error::{Error, Result};
 use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
 use siftlab_mark::{
-    check_source, escaped, knn_answer, parse_line, report_json, report_text, Case, HarnessLine, Limits, Marks, Outcome,
-    Pair, Pairs, Session, Status, Step, Task, MAX_LINE_BYTES,
+    escaped, knn_answer, parse_line, report_json, report_text, Case, HarnessLine, Limits, Marks, Outcome, Pair, Pairs,
+    Session, Status, Step, Task, MAX_LINE_BYTES,
 };
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -57,7 +57,7 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         return Err(Error::InvalidArgument("--jobs, --resume and --shard go with --out DIR (a class)".into()));
     }
     // A folder (Gradescope's /autograder/submission): its first vision_tasks.py.
-    let file = if arg.is_dir() { crate::submissions::first_found(arg) } else { Some(arg.clone()) };
+    let file = crate::submissions::single(arg)?;
     let n = a.n as usize;
     let Some(file) = file else {
         let marks = Marks::new(a.seed, n, Vec::new());
@@ -70,9 +70,8 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         return Ok(marks);
     };
     let name = file.file_name().map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
-    let bytes =
-        std::fs::read(&file).map_err(|e| Error::InvalidArgument(format!("cannot read {}: {e}", file.display())))?;
-    let marks = match check_source(&bytes) {
+    let src = crate::submissions::read_single(arg, &file)?;
+    let marks = match crate::submissions::checked(&src) {
         Err(rejection) => {
             eprintln!("siftlab: {name} scores 0: {rejection}");
             Marks::rejected(a.seed, n, rejection)

@@ -15,6 +15,9 @@ pub enum Status {
     Zero,
     /// Could not be marked (the reason says why); not a mark of the student's.
     Failed,
+    /// Not marked: an entry of the submissions that is no student's file
+    /// (a link, a special file, an odd name, an id found twice, …).
+    Refused,
 }
 
 impl Status {
@@ -23,11 +26,12 @@ impl Status {
             Status::Ok => "ok",
             Status::Zero => "zero",
             Status::Failed => "failed",
+            Status::Refused => "refused",
         }
     }
 
     fn parse(s: &str) -> Option<Status> {
-        [Status::Ok, Status::Zero, Status::Failed].into_iter().find(|x| x.name() == s)
+        [Status::Ok, Status::Zero, Status::Failed, Status::Refused].into_iter().find(|x| x.name() == s)
     }
 }
 
@@ -68,6 +72,29 @@ impl Row {
             status,
             reason: reason.to_string(),
         }
+    }
+
+    /// The row of an entry that is not marked.
+    pub fn refused(name: &str, reason: &str) -> Row {
+        Row {
+            student: name.to_string(),
+            marks: std::array::from_fn(|_| "0.00".to_string()),
+            total: 0.0,
+            status: Status::Refused,
+            reason: reason.to_string(),
+        }
+    }
+
+    /// Whether the row is a mark (`ok` or `zero`), not a failure or refusal.
+    pub fn marked(&self) -> bool {
+        matches!(self.status, Status::Ok | Status::Zero)
+    }
+
+    /// Where the row goes in grades.csv (by id, bytes, then reason) and
+    /// what tells two rows apart: an id twice is two refusals with different reasons.
+    pub fn key(&self) -> (Vec<u8>, Vec<u8>) {
+        let reason = if self.status == Status::Refused { self.reason.as_bytes() } else { b"" };
+        (self.student.as_bytes().to_vec(), reason.to_vec())
     }
 
     /// The row a report.json (as `class::mark_student` writes it) records.
@@ -130,7 +157,8 @@ impl Row {
                 student: f[0].clone(),
                 marks: [f[1].clone(), f[2].clone(), f[3].clone(), f[4].clone()],
                 total: f[5].parse().map_err(|_| format!("total {:?} is not a number", f[5]))?,
-                status: Status::parse(&f[6]).ok_or_else(|| format!("status {:?} is not ok, zero or failed", f[6]))?,
+                status: Status::parse(&f[6])
+                    .ok_or_else(|| format!("status {:?} is not ok, zero, failed or refused", f[6]))?,
                 reason: f[7].clone(),
             })
         })

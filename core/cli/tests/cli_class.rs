@@ -151,7 +151,7 @@ fn rows(grades: &str) -> BTreeMap<String, String> {
 
 /// The folder of a student's own files in a class's output.
 fn student_out(out: &Path, id: &str) -> PathBuf {
-    out.join(id)
+    out.join("students").join(id)
 }
 
 #[test]
