@@ -99,6 +99,9 @@ MAX_MARKS = {
     "import_spec": 0.0,
     "fork_bomb": 20.0,
     "memory_bomb": 20.0,
+    "overflow_rows": 15.0,
+    "knn_huge": 20.0,
+    "huge_lines": 20.0,
 }
 
 # Entries at the top of /tmp (and of the home folder) that other tools on a shared machine
