@@ -105,13 +105,7 @@ fn honest_compact(want: &[Vec<siftlab_core::matching::DMatch>]) -> String {
             d.extend_from_slice(&m.distance.to_le_bytes());
         }
     }
-    format!(
-        r#"{{"n": [{}], "q": "{}", "t": "{}", "d": "{}"}}"#,
-        n.join(", "),
-        base64(&q),
-        base64(&t),
-        base64(&d)
-    )
+    format!(r#"{{"n": [{}], "q": "{}", "t": "{}", "d": "{}"}}"#, n.join(", "), base64(&q), base64(&t), base64(&d))
 }
 
 /// A compact value built from fuzzed lengths and words (lengths that wrap
@@ -254,7 +248,7 @@ fn check_knn(request: &str, stop_after: u8) {
         let t = unbase64(v.get("t").and_then(Json::as_str).expect("t")).expect("base64");
         let d = unbase64(v.get("d").and_then(Json::as_str).expect("d")).expect("base64");
         assert!(kk >= 1 && kk <= max, "kk {kk}");
-        assert!(t.len() == d.len() && t.len() % (4 * kk) == 0 && t.len() / (4 * kk) <= max);
+        assert!(t.len() == d.len() && t.len().is_multiple_of(4 * kk) && t.len() / (4 * kk) <= max);
         // Every train index names a train row.
         assert!(t.chunks(4).all(|b| (i32::from_le_bytes(b.try_into().unwrap()) as usize) < max));
     }
@@ -275,11 +269,8 @@ pub fn mark_reply(data: &[u8]) {
         // A knn request.
         3 => {
             let stop = r.u8() % 4;
-            let req = if mode & 0x80 != 0 {
-                String::from_utf8_lossy(r.rest()).into_owned()
-            } else {
-                fuzzed_knn(&mut r)
-            };
+            let req =
+                if mode & 0x80 != 0 { String::from_utf8_lossy(r.rest()).into_owned() } else { fuzzed_knn(&mut r) };
             check_knn(&req, stop);
             return;
         }
