@@ -106,6 +106,9 @@ MAX_MARKS = {
     "import_spec": 0.0,
     "fork_bomb": 20.0,
     "memory_bomb": 20.0,
+    "overflow_rows": 15.0,
+    "knn_huge": 20.0,
+    "huge_lines": 20.0,
 }
 
 # Calls per task each fixture needs for its attack to show (others: 1). leak_secrets'

@@ -10,6 +10,7 @@ pub mod anatomy;
 pub mod args;
 pub mod class;
 pub mod common;
+mod harness_io;
 pub mod mark;
 pub mod match_all;
 mod report_files;

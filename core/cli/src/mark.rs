@@ -10,20 +10,20 @@
 
 use crate::args::{Cli, MarkArgs};
 use crate::common::{open_dataset, sift_params};
+use crate::harness_io::{read_lines, FromHarness, TempDir, LINES_QUEUED};
 use crate::report_files::{atomic_write, gradescope_json, sha256_hex};
 use crate::sandbox::{self, Python};
 use siftlab_core::dataset::Dataset;
 use siftlab_core::error::{Error, Result};
 use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
 use siftlab_mark::{
-    escaped, knn_answer, parse_line, report_json, report_text, Case, HarnessLine, Limits, Marks, Outcome, Pair, Pairs,
-    Session, Status, Step, Task, MAX_LINE_BYTES,
+    escaped, knn_answer_until, parse_line, report_json, report_text, Case, HarnessLine, Limits, Marks, Outcome, Pair,
+    Pairs, Session, Status, Step, Task,
 };
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader, Read, Write};
-use std::path::PathBuf;
+use std::io::{Read, Write};
 use std::process::{Child, Stdio};
-use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
+use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError, SyncSender, TrySendError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -217,7 +217,25 @@ impl Runner {
         self.mark(session, pairs, job, false)
     }
 
-    fn mark(&self, mut session: Session, pairs: &[Pair], job: u32, verbose: bool) -> Result<Marks> {
+    /// Marks one student. A panic while marking (a fault of siftlab's that
+    /// a reply reached) ends only this marking, as an error: the harness is
+    /// ended by its `Drop` on the way out, and a class marks the next student.
+    fn mark(&self, session: Session, pairs: &[Pair], job: u32, verbose: bool) -> Result<Marks> {
+        let marking = std::panic::AssertUnwindSafe(|| self.mark_unguarded(session, pairs, job, verbose));
+        std::panic::catch_unwind(marking).unwrap_or_else(|panic| {
+            let why = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_default();
+            Err(Error::InvalidArgument(format!(
+                "siftlab failed while marking this file (a fault of siftlab's, please report it): {}",
+                escaped(&why, 300)
+            )))
+        })
+    }
+
+    fn mark_unguarded(&self, mut session: Session, pairs: &[Pair], job: u32, verbose: bool) -> Result<Marks> {
         if verbose {
             eprintln!(
                 "python: {} (Python {}, {}), {}",
@@ -287,19 +305,14 @@ fn report_task(session: &Session, task: Task, started: Instant) {
     );
 }
 
-/// One line read from the harness, or why reading stopped.
-enum FromHarness {
-    Line(String),
-    /// A line over MAX_LINE_BYTES, dropped unread.
-    TooLong,
-}
-
 /// The harness process: requests go in through a writer thread (a long
 /// write never blocks the limits), lines come out through a reader thread.
 struct Harness {
     child: Child,
     pid: u32,
-    to_child: Option<Sender<Vec<u8>>>,
+    /// At most one message waits for the writer: a harness that stops
+    /// reading its stdin cannot make siftlab queue answers.
+    to_child: Option<SyncSender<Vec<u8>>>,
     lines: Receiver<FromHarness>,
     stderr: Arc<Mutex<Vec<u8>>>,
 }
@@ -318,7 +331,7 @@ impl Harness {
         else {
             return Err(Error::InvalidArgument("the harness's pipes are missing".into()));
         };
-        let (to_child, requests) = channel::<Vec<u8>>();
+        let (to_child, requests) = sync_channel::<Vec<u8>>(1);
         std::thread::spawn(move || {
             for mut msg in requests {
                 msg.push(b'\n');
@@ -327,7 +340,7 @@ impl Harness {
                 }
             }
         });
-        let (tx, lines) = channel::<FromHarness>();
+        let (tx, lines) = sync_channel::<FromHarness>(LINES_QUEUED);
         std::thread::spawn(move || read_lines(stdout, tx));
         let tail = Arc::new(Mutex::new(Vec::new()));
         let keep = Arc::clone(&tail);
@@ -349,27 +362,47 @@ impl Harness {
     }
 
     /// Sends request `id` and waits for its reply, answering knn requests;
-    /// the request's time is the sandbox's CPU time plus the knn answers'.
+    /// the request's time is the sandbox's CPU time plus the knn answers',
+    /// the answers' counted while they are computed.
     fn request(&mut self, line: &str, id: u64, limit: f64, pairs: &[Pair], stray: &mut usize) -> Outcome {
         let Some((cpu0, _)) = sandbox::tree_usage(self.pid) else {
             return Outcome::Crashed(self.ended(), 0.0);
         };
         if let Some(tx) = &self.to_child {
-            let _ = tx.send(line.as_bytes().to_vec());
+            if let Err(TrySendError::Full(_)) = tx.try_send(line.as_bytes().to_vec()) {
+                // Messages of earlier requests still unread: the harness
+                // stopped reading (an honest one reads every answer).
+                self.kill();
+                return Outcome::Crashed("the harness stopped reading siftlab's messages".into(), 0.0);
+            }
         }
         let t0 = Instant::now();
-        let wall = Duration::from_secs_f64(limit * Limits::default().wall_factor);
+        let wall = Duration::try_from_secs_f64(limit.max(0.0) * Limits::default().wall_factor).unwrap_or(Duration::MAX);
         let mut host = 0.0;
         let mut used = 0.0;
         loop {
             match self.lines.recv_timeout(POLL) {
                 Ok(FromHarness::Line(l)) => match parse_line(&l, id) {
                     HarnessLine::Knn => {
+                        // The harness waits for the answer: its CPU so far,
+                        // plus siftlab's as it works, is the call's time.
+                        let sandbox_cpu = sandbox::tree_usage(self.pid).map_or(used - host, |(c, _)| c - cpu0);
                         let c0 = sandbox::thread_cpu();
-                        let answer = knn_answer(&l, pairs);
+                        let answer = knn_answer_until(&l, pairs, &mut || {
+                            sandbox_cpu + host + (sandbox::thread_cpu() - c0) <= limit && t0.elapsed() <= wall
+                        });
                         host += sandbox::thread_cpu() - c0;
+                        used = used.max(sandbox_cpu + host);
+                        let Some(answer) = answer else {
+                            self.kill();
+                            return Outcome::Timeout(used.max(limit.min(t0.elapsed().as_secs_f64())));
+                        };
                         if let Some(tx) = &self.to_child {
-                            let _ = tx.send(answer.into_bytes());
+                            // Full: the harness has not read the last answer
+                            // (an honest one always has): this one is dropped.
+                            if let Err(TrySendError::Full(_)) = tx.try_send(answer.into_bytes()) {
+                                *stray += 1;
+                            }
                         }
                     }
                     HarnessLine::Reply(_) => {
@@ -445,66 +478,5 @@ impl Harness {
 impl Drop for Harness {
     fn drop(&mut self) {
         self.kill();
-    }
-}
-
-/// Lines of at most MAX_LINE_BYTES; a longer one is skipped to its end.
-fn read_lines(stdout: std::process::ChildStdout, tx: Sender<FromHarness>) {
-    let mut r = BufReader::with_capacity(1 << 20, stdout);
-    let mut line = Vec::new();
-    let mut too_long = false;
-    loop {
-        let buf = match r.fill_buf() {
-            Ok([]) | Err(_) => return,
-            Ok(b) => b,
-        };
-        let (chunk, end) = match buf.iter().position(|&b| b == b'\n') {
-            Some(i) => (&buf[..i], Some(i + 1)),
-            None => (buf, None),
-        };
-        if !too_long {
-            line.extend_from_slice(chunk);
-            if line.len() > MAX_LINE_BYTES {
-                too_long = true;
-                line = Vec::new();
-            }
-        }
-        let used = end.unwrap_or(buf.len());
-        r.consume(used);
-        if end.is_some() {
-            let item = if too_long {
-                FromHarness::TooLong
-            } else {
-                let text = String::from_utf8_lossy(&line).trim_end_matches('\r').to_string();
-                FromHarness::Line(text)
-            };
-            if tx.send(item).is_err() {
-                return;
-            }
-            line.clear();
-            too_long = false;
-        }
-    }
-}
-
-/// A folder under the system's temporary directory, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new() -> Result<TempDir> {
-        let nanos = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.subsec_nanos());
-        let dir = std::env::temp_dir().join(format!("siftlab-mark-{}-{nanos}", std::process::id()));
-        std::fs::create_dir_all(&dir)
-            .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", dir.display())))?;
-        // Readable by the sandbox's marking uid (read-only inside it).
-        use std::os::unix::fs::PermissionsExt;
-        let _ = std::fs::set_permissions(&dir, std::fs::Permissions::from_mode(0o755));
-        Ok(TempDir(dir))
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
     }
 }

@@ -22,6 +22,7 @@ mod b64;
 mod cases;
 mod diagnose;
 mod escape;
+mod knn;
 mod protocol;
 mod pyvalue;
 mod reference;
@@ -33,9 +34,10 @@ pub use b64::{base64, unbase64};
 pub use cases::{plan, threshold_text, Case, Task, DEFAULT_CASES, NUM_FEATURES};
 pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Status};
 pub use escape::{escaped, is_clean};
+pub use knn::{knn_answer, knn_answer_until, max_rows};
 pub use protocol::{
-    call_message, knn_answer, load_message, pair_message, parse_line, parse_reply, with_id, ErrorKind, HarnessLine,
-    Pair, Reply, MAX_LINE_BYTES, MAX_MESSAGE_CHARS,
+    call_message, load_message, pair_message, parse_line, parse_reply, with_id, ErrorKind, HarnessLine, Pair, Reply,
+    MAX_LINE_BYTES, MAX_MESSAGE_CHARS,
 };
 pub use pyvalue::{info_type_problem, info_value, PyValue};
 pub use reference::{reference, Expected};

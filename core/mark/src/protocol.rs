@@ -1,12 +1,12 @@
 //! The messages between the host (the CLI, or the app's worker) and
 //! `www/py/siftlab_harness.py`, one JSON object a line (docs/marking.md
-//! §Messages), and the host's answer to the harness's `knnMatch` requests.
+//! §Messages); the host's answer to the harness's `knnMatch` requests is
+//! `knn.rs`.
 
-use crate::b64::{base64, unbase64};
+use crate::b64::base64;
 use crate::cases::Case;
 use crate::reference::Expected;
-use siftlab_core::json::{parse, push_str, quote, Json};
-use siftlab_core::matching::knn_match;
+use siftlab_core::json::{parse, quote, Json};
 use siftlab_core::pyfmt::py_f32;
 use siftlab_core::sift::{Features, KeyPoint};
 use std::fmt::Write as _;
@@ -96,9 +96,13 @@ pub fn with_id(id: u64, message: &str) -> String {
     }
 }
 
-/// The longest line siftlab reads from the harness: dt's compact reply on
-/// 1500 × 1500 is about 36 MB. A longer line is dropped unread.
-pub const MAX_LINE_BYTES: usize = 64 << 20;
+/// The longest line siftlab reads from the harness; a longer one is dropped
+/// as it is read, never held. The largest honest line is dt's compact reply:
+/// 16 bytes of base64 a match, so at most 16 × 1502 × 1502 = 36.1 MB (every
+/// pair of the largest frames under the threshold) plus the student's
+/// output (at most 24 KB escaped). The good solution's largest on the demo
+/// frames is 11.8 MB (frame 133, threshold 500: 735,610 matches).
+pub const MAX_LINE_BYTES: usize = 40 << 20;
 
 /// Characters of a student's message (an exception's text) kept.
 pub const MAX_MESSAGE_CHARS: usize = 2000;
@@ -146,16 +150,50 @@ pub enum Reply {
 pub enum HarnessLine {
     /// The reply to the request.
     Reply(Reply),
-    /// `{"op": "knn", …}`: answer it with [`knn_answer`] on the same line.
+    /// `{"op": "knn", …}`: answer it with [`knn_answer`](crate::knn_answer).
     Knn,
     /// Anything else (not JSON, another id, no id, a reply of no known
     /// shape): dropped, never taken for a reply; the text says why.
     Stray(String),
 }
 
+/// The most JSON values a line from the harness may hold. Its largest
+/// honest lines are matching_info's typed value, at most 100,000 items
+/// (the harness's MAX_NODES) of at most 5 values each, and dt's compact
+/// lists (one value per query plus a few strings). A parsed value takes
+/// 32–56 bytes, so a line within this bound parses into at most ~60 MB
+/// whatever its shape (`[0,0,…]` would be 16 bytes of tree per byte).
+pub const MAX_LINE_VALUES: usize = 1 << 20;
+
+/// An upper bound of the values in a JSON text: one per `[`, `{` and `,`
+/// outside strings, plus one; counted without parsing (or allocating).
+pub fn values_bound(line: &str) -> usize {
+    let (mut n, mut in_str, mut esc) = (1usize, false, false);
+    for &b in line.as_bytes() {
+        if in_str {
+            match (esc, b) {
+                (true, _) => esc = false,
+                (false, b'\\') => esc = true,
+                (false, b'"') => in_str = false,
+                _ => {}
+            }
+        } else {
+            match b {
+                b'"' => in_str = true,
+                b'[' | b'{' | b',' => n = n.saturating_add(1),
+                _ => {}
+            }
+        }
+    }
+    n
+}
+
 /// Reads a line the harness wrote while siftlab waits for the reply to
 /// request `id`.
 pub fn parse_line(line: &str, id: u64) -> HarnessLine {
+    if values_bound(line) > MAX_LINE_VALUES {
+        return HarnessLine::Stray(bad_line(line, &format!("more than {MAX_LINE_VALUES} values")));
+    }
     let v = match parse(line) {
         Ok(v) => v,
         Err(e) => return HarnessLine::Stray(bad_line(line, &e)),
@@ -221,116 +259,10 @@ fn reply_of(v: Json) -> Result<Reply, String> {
     }
 }
 
-/// The descriptors of one side of a knn request.
-enum Side<'a> {
-    Rows(&'a [[u8; 128]]),
-    Owned(Vec<[u8; 128]>),
-}
-
-impl Side<'_> {
-    fn rows(&self) -> &[[u8; 128]] {
-        match self {
-            Side::Rows(r) => r,
-            Side::Owned(v) => v,
-        }
-    }
-}
-
-/// Answers `{"op": "knn", "q", "qid", "nq", "t", "tid", "nt", "k"}` with
-/// siftlab's `knnMatch` (per query the min(k, nt) nearest, in OpenCV's order
-/// and ties), compactly: `{"kk": K, "t": B64, "d": B64}`, the K train
-/// indices (int32) and distances (float32) of each query in turn, little
-/// endian (the list form `{"matches": [[[t, d], …], …]}` when no query has a
-/// match). A request that cannot be
-/// answered gets `{"error": MSG}` (k < 1 as OpenCV words it).
-pub fn knn_answer(request: &str, pairs: &[Pair]) -> String {
-    match knn_request(request, pairs) {
-        Ok((q, t, k)) => {
-            let all = knn_match(q.rows(), t.rows(), k);
-            let kk = all.first().map_or(0, Vec::len);
-            if kk == 0 || all.iter().any(|r| r.len() != kk) {
-                return knn_answer_lists(&all);
-            }
-            let mut ti = Vec::with_capacity(4 * kk * all.len());
-            let mut di = Vec::with_capacity(4 * kk * all.len());
-            for m in all.iter().flatten() {
-                ti.extend_from_slice(&(m.train_idx as i32).to_le_bytes());
-                di.extend_from_slice(&m.distance.to_le_bytes());
-            }
-            format!("{{\"kk\": {kk}, \"t\": \"{}\", \"d\": \"{}\"}}", base64(&ti), base64(&di))
-        }
-        Err(e) => {
-            let mut s = String::from("{\"error\": ");
-            push_str(&mut s, &e);
-            s.push('}');
-            s
-        }
-    }
-}
-
-/// `{"matches": [[[trainIdx, distance], …], …]}`.
-fn knn_answer_lists(all: &[Vec<siftlab_core::matching::DMatch>]) -> String {
-    let n: usize = all.iter().map(Vec::len).sum();
-    let mut s = String::with_capacity(16 + 3 * all.len() + 24 * n);
-    s.push_str("{\"matches\": [");
-    for (i, row) in all.iter().enumerate() {
-        if i > 0 {
-            s.push_str(", ");
-        }
-        s.push('[');
-        for (j, m) in row.iter().enumerate() {
-            if j > 0 {
-                s.push_str(", ");
-            }
-            // Rust's shortest round-trip text of the widened f32: the same
-            // f64 as Python's repr.
-            let _ = write!(s, "[{}, {:?}]", m.train_idx, m.distance as f64);
-        }
-        s.push(']');
-    }
-    s.push_str("]}");
-    s
-}
-
-fn knn_request<'a>(request: &str, pairs: &'a [Pair]) -> Result<(Side<'a>, Side<'a>, usize), String> {
-    let v = parse(request).map_err(|e| format!("knn request is not JSON: {e}"))?;
-    if v.get("op").and_then(Json::as_str) != Some("knn") {
-        return Err("not a knn request (\"op\" is not \"knn\")".into());
-    }
-    let k = v.get("k").and_then(Json::as_i64).ok_or("knn request without an integer \"k\"")?;
-    if k < 1 {
-        return Err("OpenCV(4.8.0) /io/opencv/modules/features2d/src/matchers.cpp:655: error: (-215:Assertion failed) knn > 0 in function 'knnMatch'".into());
-    }
-    let q = side(&v, "q", "qid", "nq", pairs)?;
-    let t = side(&v, "t", "tid", "nt", pairs)?;
-    Ok((q, t, usize::try_from(k).unwrap_or(usize::MAX)))
-}
-
-fn side<'a>(v: &Json, data: &str, id: &str, count: &str, pairs: &'a [Pair]) -> Result<Side<'a>, String> {
-    if let Some(r) = v.get(id).and_then(Json::as_str) {
-        let (pair, which) = r.split_once('/').ok_or_else(|| format!("\"{id}\" {r:?} is not \"K/1\" or \"K/2\""))?;
-        let pair: u32 = pair.parse().map_err(|_| format!("\"{id}\" {r:?} does not start with a pair id"))?;
-        let p = pairs.iter().find(|p| p.id == pair).ok_or_else(|| format!("\"{id}\": no pair {pair} was sent"))?;
-        return match which {
-            "1" => Ok(Side::Rows(&p.prev.descriptors)),
-            "2" => Ok(Side::Rows(&p.cur.descriptors)),
-            _ => Err(format!("\"{id}\" {r:?} is not \"K/1\" or \"K/2\"")),
-        };
-    }
-    let b64 =
-        v.get(data).and_then(Json::as_str).ok_or_else(|| format!("knn request without \"{data}\" or \"{id}\""))?;
-    let bytes = unbase64(b64).ok_or_else(|| format!("\"{data}\" is not base64"))?;
-    let n = v.get(count).and_then(Json::as_i64).ok_or_else(|| format!("knn request without an integer \"{count}\""))?;
-    if bytes.len() % 128 != 0 || i64::try_from(bytes.len() / 128) != Ok(n) {
-        return Err(format!("\"{data}\" holds {} bytes, not {n} rows of 128", bytes.len()));
-    }
-    let (rows, _) = bytes.as_chunks::<128>();
-    Ok(Side::Owned(rows.to_vec()))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::b64::unbase64;
     use siftlab_core::matching::{DMatch, MatchInfo, Strategy};
 
     fn features(n: usize, seed: u8) -> Features {
@@ -407,86 +339,17 @@ mod tests {
                 other => panic!("{line}: {other:?}"),
             }
         }
+        // A line that would parse into millions of values is not parsed.
+        let flat = format!("{{\"req\": 6, \"ok\": [{}0]}}", "0,".repeat(MAX_LINE_VALUES));
+        match parse_line(&flat, 6) {
+            HarnessLine::Stray(w) => assert!(w.contains("more than 1048576 values"), "{w}"),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(values_bound(r#"{"a": "[,{\"", "b": [1, 2]}"#), 5);
+        assert_eq!(values_bound(""), 1);
         // A student's message: control characters escaped, the length bounded.
         let long = format!("{{\"req\": 1, \"error\": \"\\u001b[2J{}\", \"kind\": \"runtime\"}}", "x".repeat(5000));
         let Reply::Error { message, .. } = parse_reply(&long, 1).unwrap() else { panic!() };
         assert!(message.starts_with("\\x1b[2Jxxx") && message.ends_with("more characters)"), "{message}");
-    }
-
-    /// A knn answer as (trainIdx, distance) rows, from either form.
-    fn rows_of(answer: &str) -> Vec<Vec<(usize, f32)>> {
-        let v = parse(answer).unwrap();
-        if let Some(rows) = v.get("matches") {
-            return rows
-                .as_arr()
-                .unwrap()
-                .iter()
-                .map(|r| {
-                    r.as_arr()
-                        .unwrap()
-                        .iter()
-                        .map(|m| {
-                            let m = m.as_arr().unwrap();
-                            (m[0].as_i64().unwrap() as usize, m[1].as_f64().unwrap() as f32)
-                        })
-                        .collect()
-                })
-                .collect();
-        }
-        let kk = v.get("kk").unwrap().as_i64().unwrap() as usize;
-        let t = unbase64(v.get("t").unwrap().as_str().unwrap()).unwrap();
-        let d = unbase64(v.get("d").unwrap().as_str().unwrap()).unwrap();
-        let t: Vec<usize> = t.chunks(4).map(|b| i32::from_le_bytes(b.try_into().unwrap()) as usize).collect();
-        let d: Vec<f32> = d.chunks(4).map(|b| f32::from_le_bytes(b.try_into().unwrap())).collect();
-        t.chunks(kk).zip(d.chunks(kk)).map(|(t, d)| t.iter().copied().zip(d.iter().copied()).collect()).collect()
-    }
-
-    #[test]
-    fn knn_is_answered_by_reference_and_by_value() {
-        let pairs = [Pair { id: 7, prev: features(40, 1), cur: features(30, 9) }];
-        let by_ref = knn_answer(
-            r#"{"op": "knn", "q": null, "qid": "7/1", "nq": 40, "t": null, "tid": "7/2", "nt": 30, "k": 3}"#,
-            &pairs,
-        );
-        let q = base64(pairs[0].prev.descriptors.as_flattened());
-        let t = base64(pairs[0].cur.descriptors.as_flattened());
-        let by_value = knn_answer(
-            &format!(
-                r#"{{"op": "knn", "q": "{q}", "qid": null, "nq": 40, "t": "{t}", "tid": null, "nt": 30, "k": 3}}"#
-            ),
-            &pairs,
-        );
-        assert_eq!(by_ref, by_value);
-        assert!(by_ref.starts_with(r#"{"kk": 3, "t": ""#), "{by_ref}");
-        let want = knn_match(&pairs[0].prev.descriptors, &pairs[0].cur.descriptors, 3);
-        let want: Vec<Vec<(usize, f32)>> =
-            want.iter().map(|r| r.iter().map(|m| (m.train_idx, m.distance)).collect()).collect();
-        assert_eq!(rows_of(&by_ref), want);
-        // The list form reads the same.
-        let lists = knn_answer_lists(&knn_match(&pairs[0].prev.descriptors, &pairs[0].cur.descriptors, 3));
-        assert_eq!(rows_of(&lists), want);
-        // Mixed: the query by value against a pair's train side; k above nt.
-        let mixed = knn_answer(
-            &format!(
-                r#"{{"op": "knn", "q": "{q}", "qid": null, "nq": 40, "t": null, "tid": "7/2", "nt": 30, "k": 99}}"#
-            ),
-            &pairs,
-        );
-        assert!(rows_of(&mixed).iter().all(|r| r.len() == 30));
-        let empty = knn_answer(r#"{"op": "knn", "q": "", "nq": 0, "tid": "7/2", "k": 2}"#, &pairs);
-        assert_eq!(empty, r#"{"matches": []}"#);
-        let no_train = knn_answer(r#"{"op": "knn", "qid": "7/1", "t": "", "nt": 0, "k": 2}"#, &pairs);
-        assert!(no_train.starts_with(r#"{"matches": [[], []"#), "{no_train}");
-        for (bad, says) in [
-            (r#"{"op": "knn", "qid": "7/1", "tid": "7/2", "k": 0}"#, "knn > 0"),
-            (r#"{"op": "knn", "qid": "8/1", "tid": "7/2", "k": 1}"#, "no pair 8"),
-            (r#"{"op": "knn", "qid": "7/3", "tid": "7/2", "k": 1}"#, "K/1"),
-            (r#"{"op": "knn", "q": "AAAA", "nq": 1, "tid": "7/2", "k": 1}"#, "not 1 rows of 128"),
-            (r#"{"op": "knn", "tid": "7/2", "k": 1}"#, "without"),
-            ("nonsense", "not JSON"),
-        ] {
-            let a = knn_answer(bad, &pairs);
-            assert!(a.starts_with("{\"error\": ") && a.contains(says), "{bad}: {a}");
-        }
     }
 }

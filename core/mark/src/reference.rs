@@ -124,24 +124,31 @@ fn compact_matches(v: &Json) -> std::result::Result<Vec<Vec<Got>>, String> {
         Ok(b.as_chunks::<4>().0.to_vec())
     };
     let (q, t, d) = (words("q")?, words("t")?, words("d")?);
-    let total: usize = n.iter().sum();
+    // The lengths are the student's: summed with a check (they may add up
+    // past usize::MAX and wrap to the words' count), each row then taken
+    // from what is left, so no index can leave the words.
+    let total = n.iter().try_fold(0usize, |sum, &len| sum.checked_add(len)).ok_or_else(|| bad("lengths"))?;
     if q.len() != total || t.len() != total || d.len() != total {
         return Err(bad("lengths"));
     }
-    let mut k = 0;
-    Ok(n.iter()
-        .map(|&len| {
-            let row = (k..k + len)
-                .map(|i| Got {
-                    query: i32::from_le_bytes(q[i]) as i64,
-                    train: i32::from_le_bytes(t[i]) as i64,
-                    distance: f32::from_le_bytes(d[i]) as f64,
-                })
-                .collect();
-            k += len;
-            row
-        })
-        .collect())
+    let mut rows = Vec::with_capacity(n.len());
+    let mut rest = q.iter().zip(&t).zip(&d);
+    for &len in &n {
+        let row: Vec<Got> = rest
+            .by_ref()
+            .take(len)
+            .map(|((q, t), d)| Got {
+                query: i32::from_le_bytes(*q) as i64,
+                train: i32::from_le_bytes(*t) as i64,
+                distance: f32::from_le_bytes(*d) as f64,
+            })
+            .collect();
+        if row.len() != len {
+            return Err(bad("lengths"));
+        }
+        rows.push(row);
+    }
+    Ok(rows)
 }
 
 /// Every list equal, in order: each DMatch's queryIdx, trainIdx and its
@@ -290,6 +297,24 @@ mod tests {
         let g = returned_matches(&parse(&compact).unwrap()).unwrap();
         assert!(matches_equal(&e, &g));
         assert!(returned_matches(&parse(r#"{"n": [3], "q": "", "t": "", "d": ""}"#).unwrap()).is_err());
+        // Lengths that wrap when summed (2 × (2^63 - 1) + 3 = 1 as a u64,
+        // the words' count): refused, never indexed; lengths that are no
+        // usize (negative, past i64, not whole) likewise.
+        let one = format!(r#""q": "{0}", "t": "{0}", "d": "{0}""#, le(&[0]));
+        for (n, why) in [
+            ("[9223372036854775807, 9223372036854775807, 3]", "lengths"),
+            ("[9223372036854775807, 9223372036854775807, 2, 0]", "lengths"),
+            ("[0, 2, 0]", "lengths"),
+            ("[18446744073709551617]", "\"n\""),
+            ("[-1, 2]", "\"n\""),
+            ("[1e30]", "\"n\""),
+            ("[0.5, 0.5]", "\"n\""),
+        ] {
+            let v = parse(&format!(r#"{{"n": {n}, {one}}}"#)).unwrap();
+            let want = format!("the harness's compact lists are malformed ({why})");
+            assert_eq!(returned_matches(&v).unwrap_err(), want, "{n}");
+        }
+        assert_eq!(returned_matches(&parse(&format!(r#"{{"n": [0, 1, 0], {one}}}"#)).unwrap()).unwrap().len(), 3);
         assert_eq!(
             expected_text(&e, Some((0, 0))),
             "2 lists, 2 matches; list 0: [(0, 3, 61.400001525878906), (0, 1, 70.0)]"
