@@ -8,12 +8,15 @@
 
 pub mod anatomy;
 pub mod args;
+mod cgroup;
 pub mod class;
 pub mod common;
 pub mod mark;
 pub mod match_all;
+mod meter;
 mod report_files;
 mod sandbox;
+mod seccomp;
 mod submissions;
 pub mod trajectory;
 pub mod visual;
