@@ -99,6 +99,11 @@ MAX_MARKS = {
     "import_spec": 0.0,
     "fork_bomb": 20.0,
     "memory_bomb": 20.0,
+    "memfd_hold": 20.0,
+    "reaped_cpu": 15.0,
+    "cpu_farm": 15.0,
+    "load_sleep": 0.0,
+    "pair_sleep": 0.0,
 }
 
 # Entries at the top of /tmp (and of the home folder) that other tools on a shared machine
