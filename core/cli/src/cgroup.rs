@@ -174,17 +174,6 @@ impl Cgroup {
         }
     }
 
-    /// The threads in the cgroup now (host thread ids).
-    pub fn threads(&self) -> Vec<u32> {
-        let file = if self.v2 { self.cpu.join("cgroup.threads") } else { self.cpuacct.join("tasks") };
-        std::fs::read_to_string(file)
-            .unwrap_or_default()
-            .split_whitespace()
-            .filter_map(|x| x.parse().ok())
-            .take(10_000)
-            .collect()
-    }
-
     /// SIGKILL to every process in the cgroup, until none is left (a fork
     /// racing the kill is caught by the next round; pids.max bounds them).
     pub fn kill_all(&self) {
@@ -230,14 +219,6 @@ impl Drop for Cgroup {
 /// Whether this machine lets siftlab make a cgroup (made and removed once).
 pub fn available(memory_bytes: u64, processes: u64) -> Result<(), String> {
     Cgroup::create(u32::MAX, memory_bytes, processes).map(drop)
-}
-
-/// Seconds `tid` has waited on a run queue (ready, not running).
-pub fn run_delay_seconds(tid: u32) -> f64 {
-    std::fs::read_to_string(format!("/proc/{tid}/schedstat"))
-        .ok()
-        .and_then(|s| s.split_whitespace().nth(1).and_then(|x| x.parse::<u64>().ok()))
-        .map_or(0.0, |ns| ns as f64 * 1e-9)
 }
 
 fn write(path: &Path, value: &str) -> Result<(), String> {

@@ -479,7 +479,7 @@ impl Harness {
             if used > limit || t0.elapsed() > wall {
                 if used <= limit && crate::meter::machine_fault(&start, &last, elapsed, used - host) {
                     self.slow = Some(format!(
-                        "reached its {:.0} s of wall time having run {:.1} s and waited {:.1} s for a CPU",
+                        "reached its {:.0} s of wall time having run {:.1} s of CPU and waited {:.1} s for one",
                         wall.as_secs_f64(),
                         used,
                         last.wait - start.wait
