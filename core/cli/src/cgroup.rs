@@ -70,7 +70,7 @@ impl Cgroup {
             // "4:memory:/a/b" or "1:cpu,cpuacct:/a/b" in /proc/self/cgroup.
             let path = own
                 .lines()
-                .filter_map(|l| l.splitn(3, ':').nth(1).zip(l.splitn(3, ':').nth(2)))
+                .filter_map(|l| l.split_once(':').and_then(|(_, rest)| rest.split_once(':')))
                 .find(|(list, _)| list.split(',').any(|x| x == c))
                 .map(|(_, p)| p.trim_start_matches('/').to_string())
                 .ok_or_else(|| format!("no cgroup v1 {c} controller"))?;

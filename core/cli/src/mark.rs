@@ -244,7 +244,7 @@ impl Runner {
         let mut harness: Option<Harness> = None;
         // The load and pairs the running harness has taken, to rebuild it
         // for a request re-run after the machine's slowness.
-        let mut setup: Vec<(u64, String, f64, &'static str)> = Vec::new();
+        let mut setup: Vec<Setup> = Vec::new();
         let mut task = None;
         let mut task_started = Instant::now();
         loop {
@@ -263,18 +263,22 @@ impl Runner {
                     harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox, job, self.cgroups)?);
                     session.started();
                 }
-                Step::Send { id, line, limit, op, .. } => {
+                Step::Send { id, line, limit, op, pair } => {
                     let Some(h) = harness.as_mut() else {
                         return Err(Error::InvalidArgument("no harness is running".into()));
                     };
                     let mut outcome = h.request(&line, id, limit, pairs, &mut session.stray_lines, op);
                     if let Some(why) = h.slow.take() {
                         drop(harness.take());
-                        (harness, outcome) = self.rerun(&setup, (id, &line, limit, op), pairs, job, &why, outcome)?;
+                        // Only the load and the pair this request needs are given again.
+                        let frame = pair.or(session.current().map(Case::frame));
+                        let needed: Vec<Setup> =
+                            setup.iter().filter(|s| s.3 == "load" || s.4 == frame).cloned().collect();
+                        (harness, outcome) = self.rerun(&needed, (id, &line, limit, op), pairs, job, &why, outcome)?;
                         session.stray_lines += harness.as_ref().map_or(0, |h| h.stray);
                     }
                     if op != "call" && matches!(outcome, Outcome::Reply(..)) {
-                        setup.push((id, line.clone(), limit, op));
+                        setup.push((id, line.clone(), limit, op, pair));
                     }
                     if !matches!(outcome, Outcome::Reply(..)) {
                         drop(harness.take());
@@ -308,7 +312,7 @@ impl Runner {
     /// harness cannot be rebuilt, the first outcome stands.
     fn rerun(
         &self,
-        setup: &[(u64, String, f64, &'static str)],
+        setup: &[Setup],
         (id, line, limit, op): (u64, &str, f64, &'static str),
         pairs: &[Pair],
         job: u32,
@@ -318,7 +322,7 @@ impl Runner {
         eprintln!("siftlab: a {op} request {why}: the machine's slowness, not the file's; running it again once");
         let mut h = Harness::start(&self.python, &self.dir.0, self.sandbox, job, self.cgroups)?;
         let mut stray = 0;
-        for (sid, sline, slimit, sop) in setup {
+        for (sid, sline, slimit, sop, _) in setup {
             if !matches!(h.request(sline, *sid, *slimit, pairs, &mut stray, sop), Outcome::Reply(..)) {
                 return Ok((None, first));
             }
@@ -331,6 +335,9 @@ impl Runner {
         Ok((Some(h), outcome))
     }
 }
+
+/// A load or pair request the running harness took: id, line, limit, op, frame.
+type Setup = (u64, String, f64, &'static str, Option<u32>);
 
 fn report_task(session: &Session, task: Task, started: Instant) {
     let of: Vec<_> = session.results().iter().filter(|r| r.case.task() == task).collect();

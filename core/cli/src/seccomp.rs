@@ -274,6 +274,8 @@ mod tests {
     /// The host's numbers as libc knows them: the table for this build's
     /// architecture must agree.
     #[test]
+    // c_long is i64 here but i32 on 32-bit targets: the casts are for those.
+    #[allow(clippy::unnecessary_cast)]
     fn the_native_table_agrees_with_libc() {
         let Some(arch) = native() else { return };
         let libc_numbers: &[(&str, libc::c_long)] = &[
