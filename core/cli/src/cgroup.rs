@@ -216,9 +216,20 @@ impl Drop for Cgroup {
     }
 }
 
-/// Whether this machine lets siftlab make a cgroup (made and removed once).
-pub fn available(memory_bytes: u64, processes: u64) -> Result<(), String> {
-    Cgroup::create(u32::MAX, memory_bytes, processes).map(drop)
+/// Whether this machine lets siftlab make a cgroup (one made and removed);
+/// if not, says why on stderr and what is measured instead.
+pub fn usable_or_say_why(memory_bytes: u64, processes: u64) -> bool {
+    match Cgroup::create(u32::MAX, memory_bytes, processes) {
+        Ok(_) => true,
+        Err(why) => {
+            eprintln!(
+                "siftlab: no cgroup for the sandboxes ({why}): CPU time and memory are read per process \
+                 tree, which misses children the kernel reaped and memory no process maps (run as root \
+                 with cgroup v1 or a delegated cgroup v2 for the full accounting)"
+            );
+            false
+        }
+    }
 }
 
 fn write(path: &Path, value: &str) -> Result<(), String> {

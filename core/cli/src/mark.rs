@@ -27,6 +27,9 @@ use std::sync::mpsc::{channel, Receiver, RecvTimeoutError, Sender};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+mod rerun;
+use rerun::Setup;
+
 /// How often a waiting request's CPU time and memory are read.
 const POLL: Duration = Duration::from_millis(50);
 /// Characters of a crashed harness's stderr kept for the report.
@@ -201,17 +204,7 @@ impl Runner {
                 ))
             })?;
         }
-        let cgroups = match crate::cgroup::available(sandbox::MEMORY_BYTES, sandbox::PROCESSES) {
-            Ok(()) => true,
-            Err(why) => {
-                eprintln!(
-                    "siftlab: no cgroup for the sandboxes ({why}): CPU time and memory are read per process \
-                     tree, which misses children the kernel reaped and memory no process maps (run as root \
-                     with cgroup v1 or a delegated cgroup v2 for the full accounting)"
-                );
-                false
-            }
-        };
+        let cgroups = crate::cgroup::usable_or_say_why(sandbox::MEMORY_BYTES, sandbox::PROCESSES);
         Ok(Runner { python, dir, sandbox: !no_sandbox, cgroups })
     }
 
@@ -304,40 +297,6 @@ impl Runner {
         }
     }
 }
-
-impl Runner {
-    /// A request that hit its wall-clock limit waiting for a CPU (`why`),
-    /// run once more in a fresh harness given the same file and pairs
-    /// first: the machine's slowness is never the file's time-out. If the
-    /// harness cannot be rebuilt, the first outcome stands.
-    fn rerun(
-        &self,
-        setup: &[Setup],
-        (id, line, limit, op): (u64, &str, f64, &'static str),
-        pairs: &[Pair],
-        job: u32,
-        why: &str,
-        first: Outcome,
-    ) -> Result<(Option<Harness>, Outcome)> {
-        eprintln!("siftlab: a {op} request {why}: the machine's slowness, not the file's; running it again once");
-        let mut h = Harness::start(&self.python, &self.dir.0, self.sandbox, job, self.cgroups)?;
-        let mut stray = 0;
-        for (sid, sline, slimit, sop, _) in setup {
-            if !matches!(h.request(sline, *sid, *slimit, pairs, &mut stray, sop), Outcome::Reply(..)) {
-                return Ok((None, first));
-            }
-        }
-        let outcome = h.request(line, id, limit, pairs, &mut stray, op);
-        if let Some(again) = h.slow.take() {
-            eprintln!("siftlab: the re-run {again} too: the machine is overloaded; its time-out stands");
-        }
-        h.stray = stray;
-        Ok((Some(h), outcome))
-    }
-}
-
-/// A load or pair request the running harness took: id, line, limit, op, frame.
-type Setup = (u64, String, f64, &'static str, Option<u32>);
 
 fn report_task(session: &Session, task: Task, started: Instant) {
     let of: Vec<_> = session.results().iter().filter(|r| r.case.task() == task).collect();
