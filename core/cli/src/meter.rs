@@ -97,10 +97,20 @@ impl Meter {
 pub fn machine_fault(start: &Reading, end: &Reading, elapsed: f64, cpu_used: f64) -> bool {
     let main_cpu = (end.run - start.run).max(0.0);
     let not_running = (elapsed - main_cpu).max(0.0);
-    let others = (cpu_used - main_cpu).max(0.0);
-    let waited = end.wait - start.wait - others;
     let throttled = end.throttled - start.throttled;
-    not_running > 0.0 && throttled < 1.0 && waited >= 0.5 * not_running
+    not_running > 0.0 && throttled < 1.0 && machine_wait(start, end, cpu_used) >= 0.5 * not_running
+}
+
+/// Seconds the harness's threads waited for a CPU that the sandbox's other
+/// processes did not take meanwhile (none while it was held back by its own
+/// quota): the wait that is the machine's.
+pub fn machine_wait(start: &Reading, end: &Reading, cpu_used: f64) -> f64 {
+    let main_cpu = (end.run - start.run).max(0.0);
+    let others = (cpu_used - main_cpu).max(0.0);
+    if end.throttled - start.throttled >= 1.0 {
+        return 0.0;
+    }
+    (end.wait - start.wait - others).max(0.0)
 }
 
 /// Seconds run and seconds waited on a run queue by all threads of `pid`.

@@ -12,9 +12,11 @@ pub(super) type Setup = (u64, String, f64, &'static str, Option<u32>);
 
 impl Runner {
     /// A request that hit its wall-clock limit waiting for a CPU (`why`),
-    /// run once more in a fresh harness given the same file and pairs
-    /// first: the machine's slowness is never the file's time-out. If the
-    /// harness cannot be rebuilt, the first outcome stands.
+    /// run once more in a fresh harness given the same file and pair
+    /// first, whose wall-clock limits leave out the time spent waiting for
+    /// a CPU (up to 4 × each limit): the machine's slowness is not the
+    /// file's time-out. If the harness cannot be rebuilt, the first outcome
+    /// stands.
     pub(super) fn rerun(
         &self,
         setup: &[Setup],
@@ -26,6 +28,7 @@ impl Runner {
     ) -> Result<(Option<Harness>, Outcome)> {
         eprintln!("siftlab: a {op} request {why}: the machine's slowness, not the file's; running it again once");
         let mut h = Harness::start(&self.python, &self.dir.0, self.sandbox, job, self.cgroups)?;
+        h.patient = true;
         let mut stray = 0;
         for (sid, sline, slimit, sop, _) in setup {
             if !matches!(h.request(sline, *sid, *slimit, pairs, &mut stray, sop), Outcome::Reply(..)) {
@@ -34,7 +37,9 @@ impl Runner {
         }
         let outcome = h.request(line, id, limit, pairs, &mut stray, op);
         if let Some(again) = h.slow.take() {
-            eprintln!("siftlab: the re-run {again} too: the machine is overloaded; its time-out stands");
+            eprintln!(
+                "siftlab: the re-run {again} too (4 x its limit): the machine is overloaded; the time-out stands"
+            );
         }
         h.stray = stray;
         Ok((Some(h), outcome))
