@@ -174,6 +174,26 @@ impl Cgroup {
         }
     }
 
+    /// Removes the empty cgroups of siftlab runs that ended without removing
+    /// theirs (killed, or their processes slow to leave): `siftlab-<pid>-*`
+    /// beside this one's, `<pid>` no longer running.
+    fn remove_stale(&self) {
+        for d in &self.dirs {
+            let Ok(entries) = d.parent().map_or_else(|| std::fs::read_dir("/nonexistent"), std::fs::read_dir) else {
+                continue;
+            };
+            for e in entries.flatten().take(10_000) {
+                let name = e.file_name().to_string_lossy().into_owned();
+                let Some(pid) = name.strip_prefix("siftlab-").and_then(|r| r.split('-').next()) else { continue };
+                let Ok(pid) = pid.parse::<u32>() else { continue };
+                if pid != std::process::id() && !Path::new(&format!("/proc/{pid}")).exists() {
+                    // Fails (EBUSY) while a process is still in it: then it stays.
+                    let _ = std::fs::remove_dir(e.path());
+                }
+            }
+        }
+    }
+
     /// SIGKILL to every process in the cgroup, until none is left (a fork
     /// racing the kill is caught by the next round; pids.max bounds them).
     pub fn kill_all(&self) {
@@ -206,7 +226,7 @@ impl Drop for Cgroup {
     fn drop(&mut self) {
         self.kill_all();
         // A killed process leaves the cgroup once it is reaped: wait a little.
-        let deadline = Instant::now() + Duration::from_secs(2);
+        let deadline = Instant::now() + Duration::from_secs(5);
         for d in self.dirs.iter().rev() {
             while std::fs::remove_dir(d).is_err() && d.exists() && Instant::now() < deadline {
                 self.kill_all();
@@ -220,7 +240,10 @@ impl Drop for Cgroup {
 /// if not, says why on stderr and what is measured instead.
 pub fn usable_or_say_why(memory_bytes: u64, processes: u64) -> bool {
     match Cgroup::create(u32::MAX, memory_bytes, processes) {
-        Ok(_) => true,
+        Ok(g) => {
+            g.remove_stale();
+            true
+        }
         Err(why) => {
             eprintln!(
                 "siftlab: no cgroup for the sandboxes ({why}): CPU time and memory are read per process \
