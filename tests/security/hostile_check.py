@@ -109,6 +109,11 @@ MAX_MARKS = {
     "overflow_rows": 15.0,
     "knn_huge": 20.0,
     "huge_lines": 20.0,
+    "memfd_hold": 20.0,
+    "reaped_cpu": 15.0,
+    "cpu_farm": 15.0,
+    "load_sleep": 0.0,
+    "pair_sleep": 0.0,
 }
 
 # Calls per task each fixture needs for its attack to show (others: 1). leak_secrets'

@@ -8,14 +8,17 @@
 
 pub mod anatomy;
 pub mod args;
+mod cgroup;
 pub mod class;
 pub mod common;
 mod harness_io;
 pub mod mark;
 pub mod match_all;
+mod meter;
 mod report_files;
 mod sandbox;
 mod seal;
+mod seccomp;
 mod submissions;
 pub mod trajectory;
 pub mod visual;

@@ -27,6 +27,9 @@ use std::sync::mpsc::{sync_channel, Receiver, RecvTimeoutError, SyncSender, TryS
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+mod rerun;
+use rerun::Setup;
+
 /// How often a waiting request's CPU time and memory are read.
 const POLL: Duration = Duration::from_millis(50);
 /// Characters of a crashed harness's stderr kept for the report.
@@ -165,6 +168,8 @@ pub(crate) struct Runner {
     python: Python,
     dir: TempDir,
     sandbox: bool,
+    /// Each harness gets a cgroup of its own (crate::cgroup).
+    cgroups: bool,
 }
 
 impl Runner {
@@ -198,7 +203,8 @@ impl Runner {
                 ))
             })?;
         }
-        Ok(Runner { python, dir, sandbox: !no_sandbox })
+        let cgroups = crate::cgroup::usable_or_say_why(sandbox::MEMORY_BYTES, sandbox::PROCESSES);
+        Ok(Runner { python, dir, sandbox: !no_sandbox, cgroups })
     }
 
     /// Marks `source` on pairs computed beforehand (those of the plan of
@@ -246,6 +252,9 @@ impl Runner {
             );
         }
         let mut harness: Option<Harness> = None;
+        // The load and pairs the running harness has taken, to rebuild it
+        // for a request re-run after the machine's slowness.
+        let mut setup: Vec<Setup> = Vec::new();
         let mut task = None;
         let mut task_started = Instant::now();
         loop {
@@ -260,14 +269,27 @@ impl Runner {
             match session.next(&mut Shared(pairs))? {
                 Step::Start => {
                     drop(harness.take());
-                    harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox, job)?);
+                    setup.clear();
+                    harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox, job, self.cgroups)?);
                     session.started();
                 }
-                Step::Send { id, line, limit, .. } => {
+                Step::Send { id, line, limit, op, pair } => {
                     let Some(h) = harness.as_mut() else {
                         return Err(Error::InvalidArgument("no harness is running".into()));
                     };
-                    let outcome = h.request(&line, id, limit, pairs, &mut session.stray_lines);
+                    let mut outcome = h.request(&line, id, limit, pairs, &mut session.stray_lines, op);
+                    if let Some(why) = h.slow.take() {
+                        drop(harness.take());
+                        // Only the load and the pair this request needs are given again.
+                        let frame = pair.or(session.current().map(Case::frame));
+                        let needed: Vec<Setup> =
+                            setup.iter().filter(|s| s.3 == "load" || s.4 == frame).cloned().collect();
+                        (harness, outcome) = self.rerun(&needed, (id, &line, limit, op), pairs, job, &why, outcome)?;
+                        session.stray_lines += harness.as_ref().map_or(0, |h| h.stray);
+                    }
+                    if op != "call" && matches!(outcome, Outcome::Reply(..)) {
+                        setup.push((id, line.clone(), limit, op, pair));
+                    }
                     if !matches!(outcome, Outcome::Reply(..)) {
                         drop(harness.take());
                     }
@@ -309,7 +331,13 @@ fn report_task(session: &Session, task: Task, started: Instant) {
 /// write never blocks the limits), lines come out through a reader thread.
 struct Harness {
     child: Child,
-    pid: u32,
+    meter: crate::meter::Meter,
+    /// Set when the last request hit its wall-clock limit waiting for a CPU.
+    slow: Option<String>,
+    /// Stray lines of a re-run's setup requests.
+    stray: usize,
+    /// A re-run's harness: the wall-clock limits leave out waits for a CPU.
+    patient: bool,
     /// At most one message waits for the writer: a harness that stops
     /// reading its stdin cannot make siftlab queue answers.
     to_child: Option<SyncSender<Vec<u8>>>,
@@ -318,9 +346,15 @@ struct Harness {
 }
 
 impl Harness {
-    fn start(python: &Python, dir: &std::path::Path, sandbox: bool, job: u32) -> Result<Harness> {
+    fn start(python: &Python, dir: &std::path::Path, sandbox: bool, job: u32, cgroup: bool) -> Result<Harness> {
+        let cgroup = if cgroup {
+            let g = crate::cgroup::Cgroup::create(job, sandbox::MEMORY_BYTES, sandbox::PROCESSES);
+            Some(g.map_err(|e| Error::InvalidArgument(format!("cannot make the sandbox's cgroup: {e}")))?)
+        } else {
+            None
+        };
         let mut child = python
-            .command(dir, sandbox, job)
+            .command(dir, sandbox, job, cgroup.as_ref())
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -358,16 +392,29 @@ impl Harness {
             }
         });
         let pid = child.id();
-        Ok(Harness { child, pid, to_child: Some(to_child), lines, stderr: tail })
+        let meter = crate::meter::Meter::new(pid, cgroup);
+        Ok(Harness {
+            child,
+            meter,
+            slow: None,
+            stray: 0,
+            patient: false,
+            to_child: Some(to_child),
+            lines,
+            stderr: tail,
+        })
     }
 
     /// Sends request `id` and waits for its reply, answering knn requests;
-    /// the request's time is the sandbox's CPU time plus the knn answers',
-    /// the answers' counted while they are computed.
-    fn request(&mut self, line: &str, id: u64, limit: f64, pairs: &[Pair], stray: &mut usize) -> Outcome {
-        let Some((cpu0, _)) = sandbox::tree_usage(self.pid) else {
+    /// a call's time is the sandbox's CPU time plus the knn answers' (counted
+    /// while they are computed), with a wall-clock backstop; harness work the
+    /// file can patch (`op` load or pair) is timed by the wall clock, as the
+    /// lab times a load.
+    fn request(&mut self, line: &str, id: u64, limit: f64, pairs: &[Pair], stray: &mut usize, op: &str) -> Outcome {
+        let Some(start) = self.meter.read() else {
             return Outcome::Crashed(self.ended(), 0.0);
         };
+        let cpu0 = start.cpu;
         if let Some(tx) = &self.to_child {
             if let Err(TrySendError::Full(_)) = tx.try_send(line.as_bytes().to_vec()) {
                 // Messages of earlier requests still unread: the harness
@@ -377,7 +424,12 @@ impl Harness {
             }
         }
         let t0 = Instant::now();
-        let wall = Duration::try_from_secs_f64(limit.max(0.0) * Limits::default().wall_factor).unwrap_or(Duration::MAX);
+        let by_wall = op != "call";
+        let wall =
+            Duration::try_from_secs_f64(if by_wall { limit } else { limit * Limits::default().wall_factor }.max(0.0))
+                .unwrap_or(Duration::MAX);
+        // The time charged: wall time for harness work, CPU time for a call.
+        let charged = |cpu: f64| if by_wall { t0.elapsed().as_secs_f64().max(cpu) } else { cpu };
         let mut host = 0.0;
         let mut used = 0.0;
         loop {
@@ -386,7 +438,7 @@ impl Harness {
                     HarnessLine::Knn => {
                         // The harness waits for the answer: its CPU so far,
                         // plus siftlab's as it works, is the call's time.
-                        let sandbox_cpu = sandbox::tree_usage(self.pid).map_or(used - host, |(c, _)| c - cpu0);
+                        let sandbox_cpu = self.meter.read().map_or(used - host, |r| r.cpu - cpu0);
                         let c0 = sandbox::thread_cpu();
                         let answer = knn_answer_until(&l, pairs, &mut || {
                             sandbox_cpu + host + (sandbox::thread_cpu() - c0) <= limit && t0.elapsed() <= wall
@@ -406,33 +458,56 @@ impl Harness {
                         }
                     }
                     HarnessLine::Reply(_) => {
-                        let cpu = sandbox::tree_usage(self.pid).map_or(used, |(c, _)| c - cpu0 + host);
-                        return Outcome::Reply(l, cpu.max(used));
+                        let cpu = self.meter.read().map_or(used, |r| r.cpu - cpu0 + host);
+                        return Outcome::Reply(l, charged(cpu.max(used)));
                     }
                     HarnessLine::Stray(_) => *stray += 1,
                 },
                 Ok(FromHarness::TooLong) => *stray += 1,
                 Err(RecvTimeoutError::Timeout) => {}
-                Err(RecvTimeoutError::Disconnected) => return Outcome::Crashed(self.ended(), used),
-            }
-            match sandbox::tree_usage(self.pid) {
-                Some((cpu, rss)) => {
-                    used = cpu - cpu0 + host;
-                    if rss > sandbox::MEMORY_BYTES {
+                Err(RecvTimeoutError::Disconnected) => {
+                    if self.meter.hit_memory_limit() {
                         self.kill();
-                        return Outcome::Crashed(
-                            format!("it used over {} GB of memory", sandbox::MEMORY_BYTES >> 30),
-                            used,
-                        );
+                        return Outcome::Crashed(self.over_memory(), charged(used));
                     }
+                    return Outcome::Crashed(self.ended(), charged(used));
                 }
-                None => return Outcome::Crashed(self.ended(), used),
             }
-            if used > limit || t0.elapsed() > wall {
+            let last = match self.meter.read() {
+                Some(r) => r,
+                None if self.meter.hit_memory_limit() => {
+                    self.kill();
+                    return Outcome::Crashed(self.over_memory(), charged(used));
+                }
+                None => return Outcome::Crashed(self.ended(), charged(used)),
+            };
+            used = last.cpu - cpu0 + host;
+            if last.memory > sandbox::MEMORY_BYTES || self.meter.hit_memory_limit() {
                 self.kill();
-                return Outcome::Timeout(used.max(limit.min(t0.elapsed().as_secs_f64())));
+                return Outcome::Crashed(self.over_memory(), charged(used));
+            }
+            let elapsed = t0.elapsed().as_secs_f64();
+            // A re-run (`patient`) does not count the time it waited for a
+            // CPU, up to 4 × its wall-clock limit in all.
+            let waited = if self.patient { crate::meter::machine_wait(&start, &last, used - host) } else { 0.0 };
+            let over_wall = elapsed - waited > wall.as_secs_f64() || elapsed > 4.0 * wall.as_secs_f64();
+            if used > limit || over_wall {
+                if used <= limit && crate::meter::machine_fault(&start, &last, elapsed, used - host) {
+                    self.slow = Some(format!(
+                        "reached its {:.0} s of wall time having run {:.1} s of CPU and waited {:.1} s for one",
+                        wall.as_secs_f64(),
+                        used,
+                        last.wait - start.wait
+                    ));
+                }
+                self.kill();
+                return Outcome::Timeout(if by_wall { limit } else { used.max(limit.min(elapsed)) });
             }
         }
+    }
+
+    fn over_memory(&self) -> String {
+        format!("it used over {} GB of memory", sandbox::MEMORY_BYTES >> 30)
     }
 
     /// The exit status and the end of stderr of a process that ended.
@@ -442,7 +517,7 @@ impl Harness {
         // The stderr thread may still be reading the last bytes.
         std::thread::sleep(Duration::from_millis(50));
         let tail = self.stderr.lock().map(|t| String::from_utf8_lossy(&t).trim().to_string()).unwrap_or_default();
-        sandbox::kill_tree(self.pid);
+        self.meter.kill();
         if tail.is_empty() {
             status
         } else {
@@ -455,7 +530,7 @@ impl Harness {
     /// Ends the sandbox: every process in it.
     fn kill(&mut self) {
         self.to_child = None;
-        sandbox::kill_tree(self.pid);
+        self.meter.kill();
         let _ = self.child.kill();
         let _ = self.child.wait();
     }

@@ -6,8 +6,11 @@
 //! memory, processes, file size and open files. The process tree is
 //! measured here (CPU time, memory) and killed as a whole.
 
+use crate::cgroup::Cgroup;
 use siftlab_core::error::{Error, Result};
 use std::ffi::OsString;
+use std::io::Write;
+use std::os::fd::{AsRawFd, FromRawFd, OwnedFd};
 use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -22,7 +25,7 @@ pub const MARK_UID: u32 = 61_000;
 /// Limits on the whole sandbox.
 pub const MEMORY_BYTES: u64 = 4 << 30;
 const ADDRESS_SPACE: u64 = 16 << 30;
-const PROCESSES: u64 = 64;
+pub const PROCESSES: u64 = 64;
 const FILE_BYTES: u64 = 64 << 20;
 const OPEN_FILES: u64 = 256;
 const TMP_BYTES: u64 = 64 << 20;
@@ -164,8 +167,20 @@ impl Python {
     /// The command that runs `harness_dir/siftlab_harness.py` sandboxed
     /// (`sandbox`) or as a plain child (`--no-sandbox`), with the limits
     /// set before it starts.
-    pub fn command(&self, harness_dir: &Path, sandbox: bool, job: u32) -> Command {
+    /// With `cgroup`, the harness joins it before exec (everything it
+    /// starts is inside); sandboxed, bubblewrap installs the seccomp filter.
+    pub fn command(&self, harness_dir: &Path, sandbox: bool, job: u32, cgroup: Option<&Cgroup>) -> Command {
+        self.build(harness_dir, sandbox, job, cgroup, false)
+    }
+
+    /// The command; with `probe`, the same sandbox runs the interpreter's
+    /// `-c "import math, json"` instead of the harness.
+    fn build(&self, harness_dir: &Path, sandbox: bool, job: u32, cgroup: Option<&Cgroup>, probe: bool) -> Command {
         let root = is_root();
+        // The filter's bytes in a pipe bubblewrap reads (`--seccomp FD`);
+        // the read end is kept by the command and opened to the child only.
+        let seccomp_fd =
+            if sandbox { crate::seccomp::native().and_then(|a| pipe_with(&crate::seccomp::program(a))) } else { None };
         let mut harness_args: Vec<OsString> = vec!["-I".into(), "-S".into(), "-B".into(), "-u".into()];
         let mut cmd = if sandbox {
             let mut c = Command::new("bwrap");
@@ -203,6 +218,9 @@ impl Python {
             c.args(["--proc", "/proc", "--dev", "/dev"]);
             c.args(["--perms", "1777", "--size", &TMP_BYTES.to_string(), "--tmpfs", "/tmp"]);
             c.arg("--ro-bind").arg(harness_dir).arg(BOX);
+            if let Some(fd) = &seccomp_fd {
+                c.args(["--seccomp", &fd.as_raw_fd().to_string()]);
+            }
             c.args(["--chdir", "/tmp", "--"]);
             c.arg(&self.exe);
             harness_args.push(format!("{BOX}/siftlab_harness.py").into());
@@ -221,12 +239,27 @@ impl Python {
             harness_args.push("--path".into());
             harness_args.push(p.into());
         }
+        if probe {
+            harness_args = ["-I", "-S", "-c", "import math, json"].map(OsString::from).to_vec();
+        }
         cmd.args(harness_args);
         let limit_processes = sandbox;
-        // SAFETY: only async-signal-safe calls (setrlimit, setsid) between
-        // fork and exec.
+        let join = cgroup.map(Cgroup::join_files).unwrap_or_default();
+        // SAFETY: only async-signal-safe calls (open, write, close, fcntl,
+        // setrlimit, setsid) between fork and exec; nothing allocates.
         unsafe {
             cmd.pre_exec(move || {
+                for file in &join {
+                    // "0": the writing process joins the cgroup.
+                    let fd = libc::open(file.as_ptr(), libc::O_WRONLY | libc::O_CLOEXEC);
+                    if fd < 0 || libc::write(fd, b"0".as_ptr().cast(), 1) != 1 {
+                        return Err(std::io::Error::last_os_error());
+                    }
+                    libc::close(fd);
+                }
+                if let Some(fd) = &seccomp_fd {
+                    libc::fcntl(fd.as_raw_fd(), libc::F_SETFD, 0);
+                }
                 let set = |what, n: u64| {
                     let r = libc::rlimit { rlim_cur: n as libc::rlim_t, rlim_max: n as libc::rlim_t };
                     libc::setrlimit(what, &r);
@@ -250,13 +283,7 @@ impl Python {
 /// Whether bubblewrap can build the sandbox here (a real run of `true`
 /// through it); `Err` says why not.
 pub fn check(python: &Python, harness_dir: &Path) -> std::result::Result<(), String> {
-    let mut c = python.command(harness_dir, true, 0);
-    // The same sandbox, running the interpreter's `-c pass` instead of the harness.
-    let args: Vec<OsString> = c.get_args().map(OsString::from).collect();
-    let cut = args.iter().position(|a| a == "--").map_or(args.len(), |i| i + 1);
-    let mut probe = Command::new(c.get_program());
-    probe.args(&args[..cut]).arg(&python.exe).args(["-I", "-S", "-c", "import math, json"]);
-    c = probe;
+    let mut c = python.build(harness_dir, true, 0, None, true);
     match c.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).output() {
         Ok(o) if o.status.success() => Ok(()),
         Ok(o) => Err(siftlab_mark::escaped(String::from_utf8_lossy(&o.stderr).trim(), 300)),
@@ -265,6 +292,20 @@ pub fn check(python: &Python, harness_dir: &Path) -> std::result::Result<(), Str
         }
         Err(e) => Err(format!("cannot run bwrap: {e}")),
     }
+}
+
+/// A pipe holding `bytes` (written whole, write end closed): its read end.
+fn pipe_with(bytes: &[u8]) -> Option<OwnedFd> {
+    let mut fds = [0; 2];
+    // SAFETY: fds is a valid array of two ints; the fds are owned below.
+    if unsafe { libc::pipe2(fds.as_mut_ptr(), libc::O_CLOEXEC) } != 0 {
+        return None;
+    }
+    // SAFETY: pipe2 returned two open descriptors that nothing else owns.
+    let (r, w) = unsafe { (OwnedFd::from_raw_fd(fds[0]), OwnedFd::from_raw_fd(fds[1])) };
+    // The program is a few hundred bytes: under any pipe's buffer.
+    std::fs::File::from(w).write_all(bytes).ok()?;
+    Some(r)
 }
 
 fn is_root() -> bool {

@@ -1,0 +1,175 @@
+//! What a running harness has used (docs/marking.md, "The sandbox", time):
+//! from its cgroup where siftlab made one (every process that was ever in
+//! it, memory of every kind), else from its process tree in /proc; and how
+//! long its threads waited for a CPU, which tells the machine's slowness
+//! from the file's own.
+
+use crate::cgroup::Cgroup;
+use crate::sandbox;
+
+/// One reading.
+#[derive(Clone, Copy, Debug)]
+pub struct Reading {
+    /// CPU seconds used so far.
+    pub cpu: f64,
+    /// Bytes of memory held now.
+    pub memory: u64,
+    /// Seconds the harness process's threads waited on a run queue.
+    pub wait: f64,
+    /// Seconds the harness process's threads ran.
+    pub run: f64,
+    /// Seconds the cgroup was held back by its own quota.
+    pub throttled: f64,
+}
+
+/// The meter of one harness process.
+pub struct Meter {
+    pid: u32,
+    cgroup: Option<Cgroup>,
+    oom0: u64,
+    /// The harness's interpreter: below bubblewrap's processes, once found.
+    harness: std::cell::Cell<Option<u32>>,
+}
+
+impl Meter {
+    pub fn new(pid: u32, cgroup: Option<Cgroup>) -> Meter {
+        let oom0 = cgroup.as_ref().map_or(0, Cgroup::oom_kills);
+        Meter { pid, cgroup, oom0, harness: std::cell::Cell::new(None) }
+    }
+
+    /// What the harness has used; `None` once its first process has ended.
+    pub fn read(&self) -> Option<Reading> {
+        let (tree_cpu, tree_memory) = sandbox::tree_usage(self.pid)?;
+        let (run, wait) = process_schedstat(self.harness_pid());
+        let Some(g) = &self.cgroup else {
+            return Some(Reading { cpu: tree_cpu, memory: tree_memory, wait, run, throttled: 0.0 });
+        };
+        Some(Reading {
+            cpu: g.cpu_seconds().unwrap_or(tree_cpu),
+            memory: g.memory_bytes().unwrap_or(tree_memory).max(tree_memory),
+            wait,
+            run,
+            throttled: g.throttled_seconds(),
+        })
+    }
+
+    /// The harness's interpreter: the first process below the started one
+    /// that is not bubblewrap (the started one itself without a sandbox).
+    fn harness_pid(&self) -> u32 {
+        if let Some(p) = self.harness.get() {
+            return p;
+        }
+        let mut p = self.pid;
+        for _ in 0..4 {
+            let comm = std::fs::read_to_string(format!("/proc/{p}/comm")).unwrap_or_default();
+            if comm.trim() != "bwrap" {
+                self.harness.set(Some(p));
+                return p;
+            }
+            match sandbox::children(p).first() {
+                Some(&c) => p = c,
+                None => break,
+            }
+        }
+        p
+    }
+
+    /// Whether the kernel ended a process of the cgroup for its memory.
+    pub fn hit_memory_limit(&self) -> bool {
+        self.cgroup.as_ref().is_some_and(|g| g.oom_kills() > self.oom0)
+    }
+
+    /// SIGKILL to the tree and to everything in the cgroup.
+    pub fn kill(&self) {
+        sandbox::kill_tree(self.pid);
+        if let Some(g) = &self.cgroup {
+            g.kill_all();
+        }
+    }
+}
+
+/// Whether a request that reached its wall-clock limit did so waiting for a
+/// CPU (the machine's fault) rather than sleeping, blocking or crowding
+/// itself out (the file's): the harness's own threads spent most of the
+/// time they did not run ready to run, that wait is not explained by the
+/// CPU the sandbox's other processes took meanwhile, and the sandbox was
+/// not held back by its own quota. `cpu_used`: the sandbox's CPU seconds.
+pub fn machine_fault(start: &Reading, end: &Reading, elapsed: f64, cpu_used: f64) -> bool {
+    let main_cpu = (end.run - start.run).max(0.0);
+    let not_running = (elapsed - main_cpu).max(0.0);
+    let throttled = end.throttled - start.throttled;
+    not_running > 0.0 && throttled < 1.0 && machine_wait(start, end, cpu_used) >= 0.5 * not_running
+}
+
+/// Seconds the harness's threads waited for a CPU that the sandbox's other
+/// processes did not take meanwhile (none while it was held back by its own
+/// quota): the wait that is the machine's.
+pub fn machine_wait(start: &Reading, end: &Reading, cpu_used: f64) -> f64 {
+    let main_cpu = (end.run - start.run).max(0.0);
+    let others = (cpu_used - main_cpu).max(0.0);
+    if end.throttled - start.throttled >= 1.0 {
+        return 0.0;
+    }
+    (end.wait - start.wait - others).max(0.0)
+}
+
+/// Seconds run and seconds waited on a run queue by all threads of `pid`.
+fn process_schedstat(pid: u32) -> (f64, f64) {
+    let (mut run, mut wait) = (0.0, 0.0);
+    if let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) {
+        for t in tasks.flatten().take(10_000) {
+            let text = std::fs::read_to_string(t.path().join("schedstat")).unwrap_or_default();
+            let mut f = text.split_whitespace().map(|x| x.parse::<u64>().unwrap_or(0) as f64 * 1e-9);
+            run += f.next().unwrap_or(0.0);
+            wait += f.next().unwrap_or(0.0);
+        }
+    }
+    (run, wait)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn r(run: f64, wait: f64, throttled: f64) -> Reading {
+        Reading { cpu: 0.0, memory: 0, wait, run, throttled }
+    }
+
+    #[test]
+    fn only_waiting_for_a_cpu_is_the_machines_fault() {
+        // 30 s of wall, 1.5 s of CPU, 27 s ready and not running: the machine.
+        assert!(machine_fault(&r(0.0, 1.0, 0.0), &r(1.5, 28.0, 0.0), 30.0, 1.5));
+        // Asleep: it never waited for a CPU.
+        assert!(!machine_fault(&r(0.0, 1.0, 0.0), &r(0.1, 1.2, 0.0), 30.0, 0.1));
+        // Held back by its own quota (a farm of its own): the file.
+        assert!(!machine_fault(&r(0.0, 0.0, 0.0), &r(1.0, 25.0, 20.0), 30.0, 9.0));
+        // Waiting behind its own children (they took the CPU): the file.
+        assert!(!machine_fault(&r(0.0, 0.0, 0.0), &r(1.0, 20.0, 0.0), 30.0, 9.9));
+    }
+
+    #[test]
+    fn a_cgroup_counts_the_cpu_of_reaped_children() {
+        let Ok(g) = Cgroup::create(7, 1 << 30, 64) else { return }; // not root, no cgroup: nothing to test
+        let join = g.join_files();
+        let mut cmd = std::process::Command::new("sh");
+        // A child that burns CPU and is reaped by the shell's exit: gone
+        // from /proc, still in the cgroup's count.
+        cmd.args(["-c", "(i=0; while [ $i -lt 200000 ]; do i=$((i+1)); done) & wait"]);
+        use std::os::unix::process::CommandExt;
+        // SAFETY: as in sandbox.rs: open, write, close only.
+        unsafe {
+            cmd.pre_exec(move || {
+                for f in &join {
+                    let fd = libc::open(f.as_ptr(), libc::O_WRONLY);
+                    libc::write(fd, b"0".as_ptr().cast(), 1);
+                    libc::close(fd);
+                }
+                Ok(())
+            });
+        }
+        let t = std::time::Instant::now();
+        assert!(cmd.status().unwrap().success());
+        let cpu = g.cpu_seconds().unwrap();
+        assert!(cpu > 0.05 && cpu < t.elapsed().as_secs_f64() * 2.0 + 0.1, "{cpu}");
+    }
+}
