@@ -39,7 +39,7 @@ Prints one PASS/FAIL line per fixture with the reasons, then a summary; exit sta
 any fixture fails (2: nothing to run).
 
     python3 tests/security/hostile_check.py [NAME...] [--only NAME] [--siftlab PATH]
-        [--dataset DIR] [-n N] [--seed 0] [--timeout 600] [--no-sandbox] [--keep] [-v]
+        [--dataset DIR] [-n N] [--seed 0] [--timeout 600] [--no-sandbox] [--keep] [-v] [-j JOBS]
 
 Each fixture runs at the smallest n that shows its attack (CALLS below: 1 call per task,
 2 for leak_secrets, whose matching_info leaks one way on odd calls and another on even
@@ -655,6 +655,11 @@ def line(r):
     return head + "\n     - " + "\n     - ".join(_safe(x) for x in r["reasons"])
 
 
+def _check_one(job):
+    name, options = job
+    return check(name, **options)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -669,6 +674,8 @@ def main(argv=None):
     ap.add_argument("--no-sandbox", action="store_true", help="pass --no-sandbox to siftlab mark")
     ap.add_argument("--keep", action="store_true", help="keep each class folder (its path is printed)")
     ap.add_argument("-v", "--verbose", action="store_true", help="print the end of the marker's stderr on failure")
+    ap.add_argument("-j", "--jobs", type=int, default=1,
+                    help="fixtures checked at once, each in a process of its own (default: %(default)s)")
     a = ap.parse_args(argv)
     known = fixtures()
     names = a.names + a.only or known
@@ -676,10 +683,19 @@ def main(argv=None):
     if unknown or not names:
         print("unknown fixture(s): %s (known: %s)" % (", ".join(unknown), ", ".join(known)), file=sys.stderr)
         return 2
+    options = dict(siftlab=a.siftlab, dataset=a.dataset, n=a.n, seed=a.seed, no_sandbox=a.no_sandbox,
+                   timeout=a.timeout, keep=a.keep)
     results = []
-    for name in names:
-        r = check(name, siftlab=a.siftlab, dataset=a.dataset, n=a.n, seed=a.seed, no_sandbox=a.no_sandbox,
-                  timeout=a.timeout, keep=a.keep)
+    # Several at once: each check runs in a worker process of its own, which becomes the
+    # subreaper of what its marking leaves; what each watches is its own (a fresh class
+    # folder, scratch TMPDIR, canary tokens and listener), so two never see each other's.
+    if a.jobs > 1:
+        import multiprocessing
+        pool = multiprocessing.get_context("fork").Pool(a.jobs, maxtasksperchild=1)
+        done = pool.imap(_check_one, [(name, options) for name in names])
+    else:
+        done = (check(name, **options) for name in names)
+    for r in done:
         results.append(r)
         print(line(r), flush=True)
         if a.keep:
@@ -687,6 +703,9 @@ def main(argv=None):
         if a.verbose and not r["ok"] and r["stderr"].strip():
             tail = r["stderr"].strip().splitlines()[-8:]
             print("     stderr: " + "\n             ".join(_safe(t)[:200] for t in tail), flush=True)
+    if a.jobs > 1:
+        pool.close()
+        pool.join()
     failed = [r["name"] for r in results if not r["ok"]]
     print("%d fixture(s): %d passed, %d failed%s" % (
         len(results), len(results) - len(failed), len(failed), (": " + ", ".join(failed)) if failed else ""))
