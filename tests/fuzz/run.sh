@@ -26,9 +26,9 @@ export PATH="$HOME/.cargo/bin:$PATH"
 rustup toolchain list | grep -q '^nightly' || rustup toolchain install nightly --profile minimal
 command -v cargo-fuzz >/dev/null || cargo install cargo-fuzz --locked
 
-# Executions per target: >= 1,000,000 for the parsers, 100,000 for SIFT.
-declare -A RUNS=([png_diff]=1000000 [matching]=1000000 [poses]=1000000 [app_state]=1000000 [sift]=100000)
-ORDER=(png_diff matching poses app_state sift)
+# Executions per target: >= 1,000,000 for the parsers (mark_reply included), 100,000 for SIFT.
+declare -A RUNS=([png_diff]=1000000 [matching]=1000000 [poses]=1000000 [app_state]=1000000 [sift]=100000 [mark_reply]=1000000)
+ORDER=(png_diff matching poses app_state sift mark_reply)
 TARGETS=("$@")
 [ ${#TARGETS[@]} -gt 0 ] || TARGETS=("${ORDER[@]}")
 SCALE="${RUNS_SCALE:-1}"
