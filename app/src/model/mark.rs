@@ -29,5 +29,15 @@ pub const MAX_CASES: u32 = 200;
 /// The lab's limits, in ms.
 pub const CALL_LIMIT_MS: i32 = 10_000;
 pub const TASK_LIMIT_MS: f64 = 300_000.0;
+/// The reference workload's time (`www/mark-worker.js`, `REFERENCE`: the
+/// median of three runs after a warm-up) on the machine the browser's
+/// limits assume: Chromium 1xx on the 2-core build machine, quiet, as the
+/// "Mark my code" e2e test reports it (`markReference`). A browser that
+/// takes longer gets its limits scaled by the ratio (docs/marking.md).
+pub const REFERENCE_NOMINAL_MS: f64 = 200.0;
+/// Limits are scaled by at most this factor: on a slower machine a
+/// time-out cannot be told from the machine (`too_slow_here`), and an
+/// endless loop is still stopped within 2 × 10 s × this.
+pub const SPEED_CAP: f64 = 5.0;
 /// Starting Python (Pyodide, ~12 MB the first time) may take this long.
 pub const START_LIMIT_MS: i32 = 120_000;

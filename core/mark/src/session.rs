@@ -225,6 +225,12 @@ impl Session {
         }
     }
 
+    /// Whether the current call went over its limit once and is to be run
+    /// again (the next [`Step::Start`] is for its re-run).
+    pub fn retrying(&self) -> bool {
+        self.retried.is_some()
+    }
+
     /// A call's limit now, in seconds (the lab's 10 s, scaled).
     pub fn call_limit(&self) -> f64 {
         self.limits.call * self.scale()
