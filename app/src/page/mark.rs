@@ -75,11 +75,8 @@ fn Report(o: Outcome) -> impl IntoView {
             o.timing.call_limit_s
         )
     };
-    let too_slow = m
-        .results
-        .iter()
-        .filter(|r| r.diagnosis.as_ref().is_some_and(|d| d.code() == "too_slow_here"))
-        .count();
+    let too_slow =
+        m.results.iter().filter(|r| r.diagnosis.as_ref().is_some_and(|d| d.code() == "too_slow_here")).count();
     let too_slow = (too_slow > 0).then(|| {
         view! {
             <p class="error" role="alert" data-testid="mark-too-slow" data-count=too_slow>
