@@ -334,7 +334,9 @@ pub async fn run(
                         "starting Python (Pyodide: about 12 MB the first time, then from the browser's cache)".into(),
                     );
                 }
-                let (w, ms, reference) = MarkWorker::start(START_LIMIT_MS).await.map_err(|e| match e {
+                // A restart on a slow or busy machine gets the scaled time.
+                let start_limit = (f64::from(START_LIMIT_MS) * session.scale()) as i32;
+                let (w, ms, reference) = MarkWorker::start(start_limit).await.map_err(|e| match e {
                     Failure::Crashed(m) => m,
                     Failure::Timeout => "Python did not start in time".to_string(),
                 })?;

@@ -44,6 +44,8 @@ async function pageSpeed() {
   return speed;
 }
 async function pageMarks() {
+  const error = await page.evaluate((sel) => document.querySelector(sel)?.textContent ?? null, tid('mark-error'));
+  assert.equal(error, null, 'the marking failed');
   const rows = await page.evalAll(tid('mark-row'), (tr) => [tr.dataset.task, tr.dataset.marks, tr.dataset.correct, tr.dataset.errors]);
   const total = await page.getAttribute(tid('mark-total'), 'data-total');
   // Each task's slowest call (against the 10 s limit), for the figures.
@@ -100,7 +102,7 @@ test('mark my code: hostile files: no connection, no forged mark, the CLI\'s tab
       await markFile(variant, MARK_N, 1, variant === 'hostile/browser_escape' ? { file: escape } : {});
       const got = await pageMarks();
       const cli = cliMarks(cliMark(variant, MARK_N, 1));
-      assert.deepEqual(got.rows, cli.rows, variant);
+      assert.deepEqual(got.rows, cli.rows, `${variant}: ${JSON.stringify({ got, speed: metrics.markSpeeds.at(-1) })}`);
       assert.equal(got.total, cli.total, variant);
       if (variant !== 'hostile/ansi_escapes') assert.deepEqual(got.diagnoses, cli.diagnoses, variant);
       if (variant === 'hostile/browser_escape') assert.equal(got.total, '20.00', 'its honest code earns 20');
@@ -120,7 +122,7 @@ test('mark my code: hostile files: no connection, no forged mark, the CLI\'s tab
 test('mark my code: an endless loop is stopped at its limit and the page stays usable; bad files get messages', async () => {
   // One call per task, seed 1: the loop variant's nndr call (t = 0.91, over its 0.9) runs
   // into its limit (10 s scaled by this browser's speed) twice, the worker is replaced, and
-  // matching_info is marked after it. Only on a machine slower than the cap (5x) is it
+  // matching_info is marked after it. Only on a machine slower than the cap (8x) is it
   // "too slow to tell here" (docs/marking.md), counted as the same error.
   const s = await markFile('loop', 1, 1);
   metrics.markLoopS = s;
@@ -129,7 +131,7 @@ test('mark my code: an endless loop is stopped at its limit and the page stays u
   const cli = cliMarks(cliMark('loop', 1, 1));
   assert.deepEqual(got.rows, cli.rows);
   assert.equal(got.total, cli.total);
-  const tooSlow = Math.max(speed.speed, speed.slowest) > 5;
+  const tooSlow = Math.max(speed.speed, speed.slowest) > 8;
   const want = cli.diagnoses.map((d) => (tooSlow ? d.replace(/:timeout$/, ':too_slow_here') : d));
   assert.deepEqual(got.diagnoses, want, JSON.stringify({ got, speed }));
   assert.ok(cli.diagnoses.includes('nndr:timeout'), JSON.stringify(cli));
