@@ -62,6 +62,32 @@ fn Report(o: Outcome) -> impl IntoView {
         })
         .collect_view();
     let full = m.full();
+    // How this browser's speed scaled the limits (the lab's are CPU time on
+    // the lab's machine; here only wall time exists).
+    let first = o.timing.speeds.first().copied().unwrap_or(1.0);
+    let slowest = o.timing.speeds.iter().copied().fold(first, f64::max);
+    let speed_text = if o.timing.speeds.is_empty() {
+        String::new()
+    } else {
+        let again = if slowest > first { format!(" (up to {slowest:.2}× at a restart)") } else { String::new() };
+        format!(
+            " · this browser ran the reference at {first:.2}× the reference time{again}; limits scaled to {:.1} s",
+            o.timing.call_limit_s
+        )
+    };
+    let too_slow =
+        m.results.iter().filter(|r| r.diagnosis.as_ref().is_some_and(|d| d.code() == "too_slow_here")).count();
+    let too_slow = (too_slow > 0).then(|| {
+        view! {
+            <p class="error" role="alert" data-testid="mark-too-slow" data-count=too_slow>
+                {format!(
+                    "{too_slow} call(s) too slow to tell here: this machine is too slow (or too busy) for its time to \
+                     say whether the lab's 10 s limit would be kept; they count as time-outs in this total. Mark the \
+                     file with `siftlab mark` on a computer for its real mark."
+                )}
+            </p>
+        }
+    });
     view! {
         <div class="mark-report" data-testid="mark-report">
             {rejection}
@@ -75,9 +101,11 @@ fn Report(o: Outcome) -> impl IntoView {
                     <tbody>{rows}</tbody>
                 </table>
             </div>
-            <p class="muted small" data-testid="mark-timing">
+            {too_slow}
+            <p class="muted small" data-testid="mark-timing" data-speed=format!("{first:.3}")
+                data-slowest-speed=format!("{slowest:.3}") data-call-limit=format!("{:.3}", o.timing.call_limit_s)>
                 {format!(
-                    "seed {}, {} calls per task · marked in {:.1} s (SIFT {:.1} s, Python's start {:.1} s, the calls {:.1} s)",
+                    "seed {}, {} calls per task · marked in {:.1} s (SIFT {:.1} s, Python's start {:.1} s, the calls {:.1} s){speed_text}",
                     m.seed, m.cases_per_task, o.ms / 1000.0, o.timing.sift_ms / 1000.0, o.timing.start_ms / 1000.0,
                     o.timing.calls_ms / 1000.0
                 )}
@@ -157,7 +185,7 @@ pub fn MarkMyCode() -> impl IntoView {
                 "Your "<code>"vision_tasks.py"</code>" runs here, in Python compiled to WebAssembly (Pyodide), with siftlab's "
                 <code>"cv2"</code>" (SIFT and "<code>"BFMatcher().knnMatch"</code>" exactly as OpenCV 4.8) and the lab's "
                 <code>"vision_tasks_base"</code>", and is marked as the lab's automarker marks it: each function on random "
-                "valid calls (frame pairs of the loaded frames), 10 s a call, 0.5 marks per task for no runtime error plus 4.5 × the "
+                "valid calls (frame pairs of the loaded frames), 10 s a call (scaled to this machine's speed), 0.5 marks per task for no runtime error plus 4.5 × the "
                 "share of exactly right values, 20 in all. Nothing leaves this page: your code runs under the page's security "
                 "policy, which lets it reach no other site."
             </p>

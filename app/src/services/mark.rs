@@ -73,8 +73,9 @@ fn reject_after(rej: &js_sys::Function, ms: i32) {
 
 impl MarkWorker {
     /// Starts the worker and waits until Python is up (at most `ms`):
-    /// returns the start-up time the worker measured, in ms.
-    pub async fn start(ms: i32) -> Result<(MarkWorker, f64), Failure> {
+    /// returns the start-up time the worker measured and its time for the
+    /// reference workload, in ms.
+    pub async fn start(ms: i32) -> Result<(MarkWorker, f64, f64), Failure> {
         let opts = web_sys::WorkerOptions::new();
         opts.set_type(web_sys::WorkerType::Module);
         opts.set_name(MARK_WORKER_NAME);
@@ -90,7 +91,7 @@ impl MarkWorker {
             match get("type").as_string().as_deref() {
                 Some("markReady") => {
                     if let Some((res, _)) = st.borrow_mut().ready.take() {
-                        let _ = res.call1(&JsValue::NULL, &get("ms"));
+                        let _ = res.call1(&JsValue::NULL, &data);
                     }
                 }
                 Some("markFailed") => {
@@ -137,7 +138,11 @@ impl MarkWorker {
         let w = MarkWorker { worker, state, _handlers: [on_message, on_error] };
         reject_after(&resolver.1, ms);
         match wasm_bindgen_futures::JsFuture::from(ready).await {
-            Ok(v) => Ok((w, v.as_f64().unwrap_or(0.0))),
+            Ok(v) => {
+                let get = |k: &str| js_sys::Reflect::get(&v, &k.into()).ok().and_then(|v| v.as_f64());
+                // No figure is the slowest: the limits get the cap.
+                Ok((w, get("ms").unwrap_or(0.0), get("reference").unwrap_or(f64::INFINITY)))
+            }
             Err(e) => {
                 w.worker.terminate();
                 let e = js_err(e);
@@ -253,6 +258,11 @@ pub struct Timing {
     pub start_ms: f64,
     /// Loading the file and every call, restarts included.
     pub calls_ms: f64,
+    /// The speed factor measured at each start of Python (its time for the
+    /// reference workload over `REFERENCE_NOMINAL_MS`).
+    pub speeds: Vec<f64>,
+    /// A call's limit after the first start, in seconds.
+    pub call_limit_s: f64,
 }
 
 /// The frames' features, computed before the marking starts.
@@ -277,10 +287,10 @@ pub async fn run(
     source: Source,
     progress: impl Fn(String),
 ) -> Result<(Marks, Timing), String> {
-    use crate::model::mark::START_LIMIT_MS;
+    use crate::model::mark::{REFERENCE_NOMINAL_MS, SPEED_CAP, START_LIMIT_MS};
     use crate::platform::now_ms;
     use std::collections::{BTreeMap, BTreeSet};
-    let mut timing = Timing { sift_ms: 0.0, start_ms: 0.0, calls_ms: 0.0 };
+    let mut timing = Timing { sift_ms: 0.0, start_ms: 0.0, calls_ms: 0.0, speeds: Vec::new(), call_limit_s: 0.0 };
     let text = match check_source(&bytes) {
         Ok(t) => t.to_string(),
         Err(r) => return Ok((Marks::rejected(seed, n, r), timing)),
@@ -290,7 +300,9 @@ pub async fn run(
     if frames.is_empty() {
         return Err("marking needs frame pairs: load the demo or a MyKITTI folder".into());
     }
-    let mut session = Session::new(&text, seed, n, &frames, Limits::default());
+    // Only wall time exists here: the limits follow the machine's speed
+    // and a call over its limit is re-run once (docs/marking.md).
+    let mut session = Session::new(&text, seed, n, &frames, Limits::wall_clock(SPEED_CAP));
     // SIFT of every frame the cases use, once each (the pool's workers in parallel).
     let needed: BTreeSet<u32> = session.cases().iter().flat_map(|c| [c.frame() - 1, c.frame()]).collect();
     let t0 = now_ms();
@@ -312,14 +324,19 @@ pub async fn run(
     let marks = loop {
         match session.next(&mut pairs).map_err(|e| e.to_string())? {
             Step::Start => {
-                if worker.take().is_some() {
+                if session.retrying() {
+                    drop(worker.take());
+                    progress("the call went over its limit: running it once more in a fresh Python".into());
+                } else if worker.take().is_some() {
                     progress("the call was stopped: restarting Python".into());
                 } else {
                     progress(
                         "starting Python (Pyodide: about 12 MB the first time, then from the browser's cache)".into(),
                     );
                 }
-                let (w, ms) = MarkWorker::start(START_LIMIT_MS).await.map_err(|e| match e {
+                // A restart on a slow or busy machine gets the scaled time.
+                let start_limit = (f64::from(START_LIMIT_MS) * session.scale()) as i32;
+                let (w, ms, reference) = MarkWorker::start(start_limit).await.map_err(|e| match e {
                     Failure::Crashed(m) => m,
                     Failure::Timeout => "Python did not start in time".to_string(),
                 })?;
@@ -327,6 +344,13 @@ pub async fn run(
                     timing.start_ms = ms;
                 }
                 LAST_START_MS.with(|c| c.set(ms));
+                // Measured at every start: a machine that got busy since
+                // gets longer limits for the re-run.
+                session.measured(reference / REFERENCE_NOMINAL_MS);
+                timing.speeds.push(session.speed());
+                if timing.call_limit_s == 0.0 {
+                    timing.call_limit_s = session.call_limit();
+                }
                 worker = Some(w);
                 session.started();
             }

@@ -42,7 +42,7 @@ pub use protocol::{
 pub use pyvalue::{info_type_problem, info_value, PyValue};
 pub use reference::{reference, Expected};
 pub use report::{report_json, report_text, Marks, TaskMarks};
-pub use session::{Limits, Outcome, Pairs, Session, Step};
+pub use session::{Limits, Outcome, Pairs, Session, Step, WallClock};
 pub use siftlab_core::json::{parse as parse_json, Json};
 pub use source::{check_source, Rejection, MAX_SOURCE_BYTES};
 

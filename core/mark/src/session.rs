@@ -45,11 +45,34 @@ pub struct Limits {
     /// A request still running after `wall_factor` × its limit of wall time
     /// ends, whatever its CPU time (a stopped or sleeping process).
     pub wall_factor: f64,
+    /// Set where only wall time can be measured (the browser): the limits
+    /// then follow the machine's speed and a call over its limit is re-run
+    /// once before it counts. `None` natively: CPU time needs neither.
+    pub wall_clock: Option<WallClock>,
+}
+
+/// How limits measured in wall time follow the machine (docs/marking.md,
+/// "Mark my code"): every limit is scaled by the speed the transport
+/// measured ([`Session::measured`]), never below the lab's and at most by
+/// `cap`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WallClock {
+    /// The largest factor: on a machine slower than this a time-out cannot
+    /// be told from the machine ([`Diagnosis::TooSlowHere`]), and an endless
+    /// loop still ends within `call` × `cap` seconds a try.
+    pub cap: f64,
 }
 
 impl Default for Limits {
     fn default() -> Limits {
-        Limits { call: 10.0, task: 300.0, load: 60.0, pair: 15.0, wall_factor: 3.0 }
+        Limits { call: 10.0, task: 300.0, load: 60.0, pair: 15.0, wall_factor: 3.0, wall_clock: None }
+    }
+}
+
+impl Limits {
+    /// The browser's: the lab's limits in wall time, scaled by the speed.
+    pub fn wall_clock(cap: f64) -> Limits {
+        Limits { wall_clock: Some(WallClock { cap }), ..Limits::default() }
     }
 }
 
@@ -113,6 +136,12 @@ pub struct Session {
     /// The current case's reference value.
     expected: Option<Expected>,
     rejection: Option<Rejection>,
+    /// The machine's last measured time for the reference workload over its
+    /// nominal time (1: as fast as the machine the limits assume).
+    speed: f64,
+    /// The current call went over its limit once and is being re-run; the
+    /// speed measured before that first try.
+    retried: Option<f64>,
     /// Lines dropped because they were no reply (shown on stderr by the CLI).
     pub stray_lines: usize,
 }
@@ -144,6 +173,8 @@ impl Session {
             request: 0,
             expected: None,
             rejection: None,
+            speed: 1.0,
+            retried: None,
             stray_lines: 0,
         }
     }
@@ -172,6 +203,39 @@ impl Session {
     /// answers it if it is a knn request, or drops it).
     pub fn is_reply(line: &str, id: u64) -> bool {
         matches!(parse_line(line, id), HarnessLine::Reply(_))
+    }
+
+    /// The transport measured the machine's speed (its time for the
+    /// reference workload over the nominal time); with
+    /// [`Limits::wall_clock`] the limits follow it. A factor that is not a
+    /// positive number counts as the slowest allowed (the cap).
+    pub fn measured(&mut self, speed: f64) {
+        self.speed = if speed.is_finite() && speed > 0.0 { speed } else { f64::INFINITY };
+    }
+
+    /// The last measured speed factor (1 until one is measured).
+    pub fn speed(&self) -> f64 {
+        self.speed
+    }
+
+    /// What the limits are multiplied by now: 1 natively; in wall time the
+    /// speed, never below 1 (the lab's) and at most the cap.
+    pub fn scale(&self) -> f64 {
+        match self.limits.wall_clock {
+            Some(w) => self.speed.clamp(1.0, w.cap.max(1.0)),
+            None => 1.0,
+        }
+    }
+
+    /// Whether the current call went over its limit once and is to be run
+    /// again (the next [`Step::Start`] is for its re-run).
+    pub fn retrying(&self) -> bool {
+        self.retried.is_some()
+    }
+
+    /// A call's limit now, in seconds (the lab's 10 s, scaled).
+    pub fn call_limit(&self) -> f64 {
+        self.limits.call * self.scale()
     }
 
     /// The transport started a fresh harness (after [`Step::Start`]).
@@ -206,7 +270,7 @@ impl Session {
                 let p = pairs.pair(case.frame())?;
                 self.expected = Some(reference(&case, &p.prev, &p.cur)?);
             }
-            if self.spent[t] >= self.limits.task {
+            if self.spent[t] >= self.limits.task * self.scale() {
                 // The reference marker: once a task's 300 s are used, its
                 // remaining calls are errors without running.
                 let d = Diagnosis::TaskTimeLimit { seconds: self.limits.task };
@@ -217,7 +281,7 @@ impl Session {
                 return Ok(Step::Start);
             }
             if !self.loaded {
-                let limit = self.limit_for(t, self.limits.load);
+                let limit = self.limit_for(t, self.limits.load * self.scale());
                 let msg = load_message(&self.source);
                 return Ok(self.send(&msg, limit, Waiting::Load));
             }
@@ -225,10 +289,10 @@ impl Session {
             if !self.sent.contains(&frame) {
                 let p = pairs.pair(frame)?;
                 let msg = pair_message(p.id, &p.prev, &p.cur);
-                let limit = self.limit_for(t, self.limits.pair);
+                let limit = self.limit_for(t, self.limits.pair * self.scale());
                 return Ok(self.send(&msg, limit, Waiting::Pair(frame)));
             }
-            let limit = self.limit_for(t, self.limits.call);
+            let limit = self.limit_for(t, self.call_limit());
             let msg = call_message(&case, frame, self.expected.as_ref().expect("set above"));
             return Ok(self.send(&msg, limit, Waiting::Call));
         }
@@ -238,7 +302,7 @@ impl Session {
     /// been loaded (the first load is no task's).
     fn limit_for(&self, t: usize, limit: f64) -> f64 {
         if self.ever_loaded {
-            limit.min(self.limits.task - self.spent[t])
+            limit.min(self.limits.task * self.scale() - self.spent[t])
         } else {
             limit
         }
@@ -248,6 +312,7 @@ impl Session {
         let e = self.expected.take().expect("a case's reference is computed before it is judged");
         self.results.push(f(&e));
         self.next_case += 1;
+        self.retried = None;
     }
 
     /// The harness is no longer usable: the next step starts another.
@@ -268,6 +333,19 @@ impl Session {
         let used = match &outcome {
             Outcome::Reply(_, s) | Outcome::Timeout(s) | Outcome::Crashed(_, s) => *s,
         };
+        let over = match &outcome {
+            Outcome::Timeout(_) => true,
+            Outcome::Reply(..) => used > self.call_limit(),
+            Outcome::Crashed(..) => false,
+        };
+        if waiting == Waiting::Call && over && self.limits.wall_clock.is_some() && self.retried.is_none() {
+            // In wall time the machine may have been busy: the call is run
+            // again in a fresh harness (after a new speed measurement)
+            // before it counts, and the first try is charged to no task.
+            self.retried = Some(self.speed);
+            self.restart();
+            return Ok(());
+        }
         // Reloads and pairs after the first load count against the task,
         // as its calls do.
         if self.ever_loaded || waiting == Waiting::Call {
@@ -335,12 +413,10 @@ impl Session {
                 }
             },
             Waiting::Call => {
-                let limit = self.limits.call;
+                let timeout = self.timeout_diagnosis();
                 let (result, restart) = match (&outcome, reply) {
                     // Over the limit by the lab's measure, even if it returned.
-                    (Outcome::Reply(..), Some(_)) if used > limit => {
-                        (Err(Diagnosis::Timeout { seconds: limit }), false)
-                    }
+                    (Outcome::Reply(..), Some(_)) if over => (Err(timeout), false),
                     (Outcome::Reply(..), Some(Reply::Error { message, kind: ErrorKind::Protocol })) => {
                         // The harness lives in the student's interpreter: a
                         // refusal is the call's error, and the process is
@@ -349,7 +425,7 @@ impl Session {
                     }
                     (Outcome::Reply(..), Some(reply)) => (Ok(reply), false),
                     (Outcome::Reply(..), None) => (Err(crash("its reply was unreadable")), true),
-                    (Outcome::Timeout(_), _) => (Err(Diagnosis::Timeout { seconds: limit }), true),
+                    (Outcome::Timeout(_), _) => (Err(timeout), true),
                     (Outcome::Crashed(why, _), _) => (Err(crash(why)), true),
                 };
                 if restart {
@@ -369,119 +445,23 @@ impl Session {
     }
 }
 
+impl Session {
+    /// A call over its limit: a time-out, or in wall time on a machine
+    /// slower than the cap (on either try) a case that cannot be told.
+    fn timeout_diagnosis(&self) -> Diagnosis {
+        match self.limits.wall_clock {
+            Some(w) if self.speed.max(self.retried.unwrap_or(0.0)) > w.cap => {
+                Diagnosis::TooSlowHere { limit: self.call_limit(), speed: self.speed.max(self.retried.unwrap_or(0.0)) }
+            }
+            _ => Diagnosis::Timeout { seconds: self.limits.call },
+        }
+    }
+}
+
 fn task_index(task: Task) -> usize {
     Task::ALL.iter().position(|&t| t == task).unwrap_or(0)
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use siftlab_core::sift::{Features, KeyPoint};
-
-    struct Fake(Vec<Pair>);
-
-    impl Pairs for Fake {
-        fn pair(&mut self, frame: u32) -> Result<&Pair> {
-            if !self.0.iter().any(|p| p.id == frame) {
-                let f = |seed: usize| Features {
-                    keypoints: vec![KeyPoint { x: 5.0, y: 7.0, size: 2.0, angle: 0.0, response: 0.1, octave: 0 }; 1500],
-                    descriptors: (0..1500)
-                        .map(|i| std::array::from_fn(|j| ((i * 31 + j * 7 + seed) % 200) as u8))
-                        .collect(),
-                };
-                self.0.push(Pair { id: frame, prev: f(frame as usize), cur: f(frame as usize + 3) });
-            }
-            Ok(self.0.iter().find(|p| p.id == frame).expect("inserted"))
-        }
-    }
-
-    /// Drives a session with `reply(step_line) -> Outcome`.
-    fn drive(limits: Limits, mut reply: impl FnMut(&str, u64) -> Outcome) -> (Marks, usize, usize) {
-        let mut s = Session::new("class VisionTasks: pass", 1, 2, &[1, 2, 3], limits);
-        let mut pairs = Fake(Vec::new());
-        let (mut starts, mut sends) = (0, 0);
-        loop {
-            match s.next(&mut pairs).unwrap() {
-                Step::Start => {
-                    starts += 1;
-                    s.started();
-                }
-                Step::Send { id, line, .. } => {
-                    sends += 1;
-                    let o = reply(&line, id);
-                    s.outcome(o, &mut pairs).unwrap();
-                }
-                Step::Done(m) => return (m, starts, sends),
-            }
-        }
-    }
-
-    #[test]
-    fn stray_lines_time_outs_and_crashes_never_end_the_marking() {
-        let ok = |id: u64| format!("{{\"req\": {id}, \"ok\": true}}");
-        let (m, starts, _) = drive(Limits::default(), |line, id| {
-            if line.contains("\"op\": \"call\"") {
-                if line.contains("\"fn\": \"dt\"") {
-                    Outcome::Timeout(10.0)
-                } else if line.contains("\"fn\": \"nn\"") {
-                    Outcome::Crashed("signal 9".into(), 0.5)
-                } else if line.contains("\"fn\": \"nndr\"") {
-                    // A reply for another request, then garbage: both dropped.
-                    Outcome::Reply(format!("{{\"req\": {}, \"ok\": []}}", id + 1), 0.1)
-                } else {
-                    Outcome::Reply("\u{1b}[2J not json".into(), 0.1)
-                }
-            } else {
-                Outcome::Reply(ok(id), 0.01)
-            }
-        });
-        assert!(m.rejection.is_none());
-        assert_eq!(m.tasks.iter().map(|t| (t.calls, t.errors)).collect::<Vec<_>>(), [(2, 2); 4]);
-        // One start, then one after each of the 8 failed calls but the last.
-        assert_eq!(starts, 8);
-        let text = crate::report::report_text(&m);
-        assert!(crate::escape::is_clean(&text), "{text}");
-    }
-
-    #[test]
-    fn budgets_count_reloads_and_cut_the_last_call() {
-        let mut limits_seen = Vec::new();
-        let limits = Limits { task: 25.0, ..Limits::default() };
-        let (m, _, _) = drive(limits, |line, id| {
-            if line.contains("\"op\": \"load\"") {
-                // Every reload after the first takes 8 s.
-                limits_seen.push(("load", id));
-                Outcome::Reply(format!("{{\"req\": {id}, \"ok\": true}}"), if id == 1 { 1.0 } else { 8.0 })
-            } else if line.contains("\"op\": \"call\"") && line.contains("\"fn\": \"dt\"") {
-                Outcome::Timeout(10.0)
-            } else if line.contains("\"op\": \"call\"") {
-                Outcome::Reply(format!("{{\"req\": {id}, \"error\": \"x\", \"kind\": \"runtime\"}}"), 0.1)
-            } else {
-                Outcome::Reply(format!("{{\"req\": {id}, \"ok\": true}}"), 0.0)
-            }
-        });
-        // dt: 10 s (time-out) + 8 s (reload) + 10 s: over 25 s, no third call.
-        let dt: Vec<_> = m
-            .results
-            .iter()
-            .filter(|r| r.case.task() == Task::Dt)
-            .map(|r| r.diagnosis.as_ref().map(|d| d.code()))
-            .collect();
-        assert_eq!(dt, [Some("timeout"), Some("timeout")]);
-        assert!(m.tasks.iter().all(|t| t.calls == 2));
-    }
-
-    #[test]
-    fn a_first_load_that_fails_rejects_the_file() {
-        let (m, _, sends) = drive(Limits::default(), |_, id| {
-            Outcome::Reply(
-                format!("{{\"req\": {id}, \"error\": \"No module named 'yaml'\", \"kind\": \"import\"}}"),
-                0.1,
-            )
-        });
-        assert_eq!(m.rejection.as_ref().map(|r| r.code()), Some("import"));
-        assert_eq!(sends, 1);
-        let (m, _, _) = drive(Limits::default(), |_, _| Outcome::Timeout(60.0));
-        assert_eq!(m.rejection.as_ref().map(|r| r.code()), Some("load_timeout"));
-    }
-}
+#[path = "session_tests.rs"]
+mod tests;

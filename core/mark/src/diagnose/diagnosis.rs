@@ -44,6 +44,11 @@ pub enum Diagnosis {
     Runtime { message: String, hint: Option<&'static str> },
     /// Over the per-call limit; the process was stopped.
     Timeout { seconds: f64 },
+    /// In wall time (the browser), over the limit scaled to the machine's
+    /// speed on both tries, on a machine slower than the scale's cap: it
+    /// cannot be told from a time-out. `limit` is the scaled limit, `speed`
+    /// the slowest factor measured.
+    TooSlowHere { limit: f64, speed: f64 },
     /// Not run: the task's time was used up.
     TaskTimeLimit { seconds: f64 },
     /// The Python process ended during the call.
@@ -78,6 +83,7 @@ impl Diagnosis {
             Diagnosis::WrongType(_) => "wrong_type",
             Diagnosis::Runtime { .. } => "runtime_error",
             Diagnosis::Timeout { .. } => "timeout",
+            Diagnosis::TooSlowHere { .. } => "too_slow_here",
             Diagnosis::TaskTimeLimit { .. } => "task_time_limit",
             Diagnosis::Crashed(_) => "crashed",
             Diagnosis::Differs(_) => "differs",
@@ -147,6 +153,12 @@ impl Diagnosis {
             Diagnosis::Timeout { seconds } => format!(
                 "the call ran over {seconds} s and was stopped (an endless loop, or far too slow); it counts as a \
                  runtime error"
+            ),
+            Diagnosis::TooSlowHere { limit, speed } => format!(
+                "too slow to tell here: this machine ran the reference workload at {speed:.1}x the reference \
+                 time, so the call was given {limit:.0} s (the lab's limit scaled, at most that much) and ran over \
+                 it twice; whether it keeps to the lab's 10 s of CPU time cannot be told on this machine. It counts \
+                 as a time-out here: run `siftlab mark` natively for the real mark"
             ),
             Diagnosis::TaskTimeLimit { seconds } => {
                 format!("not run: the task's {seconds} s were used up by the calls before it")
