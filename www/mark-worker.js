@@ -13,6 +13,7 @@
 // JavaScript the student's Python reaches, it cannot fetch from another origin or evaluate
 // code. Relative URLs here resolve against import.meta.url, this file's real address.
 import { loadPyodide } from './pyodide/pyodide.mjs';
+import { lockDown } from './mark-lockdown.js';
 
 const FILES = ['cv2.py', 'vision_tasks_base.py', 'siftlab_harness.py'];
 
@@ -76,15 +77,9 @@ async function start() {
   const harness = py.pyimport('siftlab_harness');
   const reference = timeReference(py);
   harness.host_knn = (line) => wasm.mark_host_knn(line);
-  // Python starts only now; what it must not use goes first. The CSP already keeps the
-  // network to this origin; these also keep the student's code off this origin's storage,
-  // off nested workers and off the network APIs altogether.
-  for (const name of ['fetch', 'XMLHttpRequest', 'WebSocket', 'WebSocketStream', 'EventSource', 'WebTransport',
-    'importScripts', 'Worker', 'SharedWorker', 'indexedDB', 'caches', 'BroadcastChannel', 'Request',
-    'cookieStore', 'storage']) {
-    try { delete self[name]; } catch (_) { /* not configurable: the CSP still holds */ }
-    if (name in self) { try { Object.defineProperty(self, name, { value: undefined }); } catch (_) { /* idem */ } }
-  }
+  // Python starts only now; what it must not reach goes first (mark-lockdown.js): the
+  // network, this origin's storage, nested workers, and JavaScript from Python's imports.
+  lockDown(py);
   return { wasm, harness, ms: performance.now() - t0, reference };
 }
 
