@@ -28,7 +28,10 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 mod rerun;
-use rerun::Setup;
+
+/// A load or pair request the running harness took: id, line, limit, op, frame
+/// (what a re-run gives a fresh harness first: `rerun`).
+type Setup = (u64, String, f64, &'static str, Option<u32>);
 
 /// How often a waiting request's CPU time and memory are read.
 const POLL: Duration = Duration::from_millis(50);

@@ -3,12 +3,9 @@
 //! file's): a fresh harness, given the load and the pair the request needs,
 //! runs it once more.
 
-use super::{Harness, Runner};
+use super::{Harness, Runner, Setup};
 use siftlab_core::error::Result;
 use siftlab_mark::{Outcome, Pair};
-
-/// A load or pair request the running harness took: id, line, limit, op, frame.
-pub(super) type Setup = (u64, String, f64, &'static str, Option<u32>);
 
 impl Runner {
     /// A request that hit its wall-clock limit waiting for a CPU (`why`),
