@@ -163,7 +163,7 @@ fn side<'a>(v: &Json, data: &str, id: &str, count: &str, pairs: &'a [Pair], max:
 #[cfg(test)]
 mod tests {
     use super::*;
-    use siftlab_core::sift::{Features, KeyPoint};
+    use crate::protocol::tests::features;
 
     fn error_of(answer: &str) -> String {
         let v = parse(answer).unwrap();
@@ -220,16 +220,6 @@ mod tests {
         // A refused request is answered whatever the time.
         let refused = knn_answer_until(r#"{"op": "knn", "k": 0}"#, &pairs, &mut || false).unwrap();
         assert!(error_of(&refused).contains("knn > 0"));
-    }
-
-    fn features(n: usize, seed: u8) -> Features {
-        let kp = KeyPoint { x: 523.97, y: 181.2, size: 2.5, angle: 359.9, response: 0.0123, octave: 0x10203 };
-        Features {
-            keypoints: vec![kp; n],
-            descriptors: (0..n)
-                .map(|i| std::array::from_fn(|j| ((i * 7 + j * 13 + seed as usize) % 256) as u8))
-                .collect(),
-        }
     }
 
     /// A knn answer as (trainIdx, distance) rows, from either form.

@@ -260,12 +260,13 @@ fn reply_of(v: Json) -> Result<Reply, String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::b64::unbase64;
     use siftlab_core::matching::{DMatch, MatchInfo, Strategy};
 
-    fn features(n: usize, seed: u8) -> Features {
+    /// `n` keypoints with distinct descriptors (also the knn tests' features).
+    pub(crate) fn features(n: usize, seed: u8) -> Features {
         let kp = KeyPoint { x: 523.97, y: 181.2, size: 2.5, angle: 359.9, response: 0.0123, octave: 0x10203 };
         Features {
             keypoints: vec![kp; n],
