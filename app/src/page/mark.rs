@@ -66,6 +66,8 @@ fn Report(o: Outcome) -> impl IntoView {
     // the lab's machine; here only wall time exists).
     let first = o.timing.speeds.first().copied().unwrap_or(1.0);
     let slowest = o.timing.speeds.iter().copied().fold(first, f64::max);
+    // Every start's speed, in order, for the e2e suite's check of which try ran too slow.
+    let speeds = o.timing.speeds.iter().map(|s| format!("{s:.3}")).collect::<Vec<_>>().join(",");
     let speed_text = if o.timing.speeds.is_empty() {
         String::new()
     } else {
@@ -103,7 +105,9 @@ fn Report(o: Outcome) -> impl IntoView {
             </div>
             {too_slow}
             <p class="muted small" data-testid="mark-timing" data-speed=format!("{first:.3}")
-                data-slowest-speed=format!("{slowest:.3}") data-call-limit=format!("{:.3}", o.timing.call_limit_s)>
+                data-slowest-speed=format!("{slowest:.3}")
+                data-speeds=speeds
+                data-call-limit=format!("{:.3}", o.timing.call_limit_s)>
                 {format!(
                     "seed {}, {} calls per task · marked in {:.1} s (SIFT {:.1} s, Python's start {:.1} s, the calls {:.1} s){speed_text}",
                     m.seed, m.cases_per_task, o.ms / 1000.0, o.timing.sift_ms / 1000.0, o.timing.start_ms / 1000.0,

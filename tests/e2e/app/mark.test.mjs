@@ -39,7 +39,8 @@ async function markFile(variant, n, seed, { file } = {}) {
 // call limit it scaled to, for the figures.
 async function pageSpeed() {
   const get = (a) => page.getAttribute(tid('mark-timing'), a).then(Number);
-  const speed = { speed: await get('data-speed'), slowest: await get('data-slowest-speed'), limit: await get('data-call-limit') };
+  const speed = { speed: await get('data-speed'), slowest: await get('data-slowest-speed'), limit: await get('data-call-limit'),
+    speeds: (await page.getAttribute(tid('mark-timing'), 'data-speeds')).split(',').filter(Boolean).map(Number) };
   metrics.markSpeeds = [...(metrics.markSpeeds || []), speed];
   return speed;
 }
@@ -152,7 +153,12 @@ test('mark my code: an endless loop is stopped at its limit and the page stays u
   const cli = cliMarks(cliMark('loop', 1, 1));
   assert.deepEqual(got.rows, cli.rows);
   assert.equal(got.total, cli.total);
-  const tooSlow = Math.max(speed.speed, speed.slowest) > 8;
+  // The speeds measured at each Python start, in order: the first call at speeds[0], its re-run
+  // after the first restart at speeds[1]; the restart after the re-run (speeds[2], for
+  // matching_info) comes after the verdict. In WebKit that last one is slow by design: JSC keeps
+  // both stopped loops running. Too slow to tell iff either try ran past the cap.
+  assert.ok(speed.speeds.length >= 3, JSON.stringify(speed));
+  const tooSlow = Math.max(speed.speeds[0], speed.speeds[1]) > 8;
   const want = cli.diagnoses.map((d) => (tooSlow ? d.replace(/:timeout$/, ':too_slow_here') : d));
   assert.deepEqual(got.diagnoses, want, JSON.stringify({ got, speed }));
   assert.ok(cli.diagnoses.includes('nndr:timeout'), JSON.stringify(cli));
