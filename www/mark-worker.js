@@ -99,7 +99,12 @@ onmessage = async (ev) => {
     if (op === 'pair') wasm.mark_host_pair(ev.data);
     reply = harness.handle(line);
   } catch (e) {
-    reply = JSON.stringify({ error: `the marking worker failed: ${e && e.message ? e.message : e}`, kind: 'host' });
+    // The harness catches whatever the student's code raises, so a throw here means Python
+    // itself ended: os._exit() makes Pyodide throw "Program terminated with exit(N)" and
+    // refuse every later call. That is the native marker's crash (the process ended), told
+    // at once rather than at the call's time limit.
+    postMessage({ type: 'markCrashed', id, message: String(e && e.message ? e.message : e) });
+    return;
   }
   postMessage({ type: 'markReply', id, line: reply });
 };

@@ -14,13 +14,19 @@
 //! - [`services`]: the page side of the workers and of file I/O;
 //! - [`page`]: the leptos components, in the order of the page.
 
+// The page's layers need leptos (the `page` feature, on by default); the worker's build
+// compiles only protocol, platform and worker.
+#[cfg(feature = "page")]
 pub mod model;
+#[cfg(feature = "page")]
 pub mod page;
 pub mod platform;
 pub mod protocol;
+#[cfg(feature = "page")]
 pub mod services;
 pub mod worker;
 
+#[cfg(feature = "page")]
 pub use page::App;
 
 /// Panics go to the console (and fail the e2e test's console check) instead of

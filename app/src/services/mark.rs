@@ -115,6 +115,17 @@ impl MarkWorker {
                         _ => s.stray += 1,
                     }
                 }
+                Some("markCrashed") => {
+                    // Python ended inside the call (os._exit): the call crashed.
+                    // The student's code could post this too, but a crash only
+                    // costs its own call.
+                    let id = get("id").as_f64().unwrap_or(-1.0) as u32;
+                    // Prefixed here, so no posted text can pass for "timeout".
+                    let message = format!("Python ended: {}", get("message").as_string().unwrap_or_default());
+                    if let Some(((_, rej), _)) = st.borrow_mut().pending.remove(&id) {
+                        let _ = rej.call1(&JsValue::NULL, &JsValue::from_str(&message));
+                    }
+                }
                 _ => {}
             }
         });
