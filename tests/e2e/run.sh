@@ -35,14 +35,18 @@ fi
 if [ ! -f dist/index.html ] || [ ! -f dist/pkg/siftlab_app_bg.wasm ]; then
     www/build
 fi
-# The reference CLI, from the same target dir cargo builds into (CARGO_TARGET_DIR, if set,
-# keeps a second build off a concurrent one); the tests read its path from SIFTLAB_CLI.
-TARGET="${CARGO_TARGET_DIR:-target}"
-case "$TARGET" in /*) ;; *) TARGET="$ROOT/$TARGET" ;; esac
-export SIFTLAB_CLI="$TARGET/release/siftlab"
-if [ ! -x "$SIFTLAB_CLI" ]; then
-    cargo build --release --bin siftlab
+# The reference CLI: SIFTLAB_CLI if set (tests/run passes the one its tests built), else the
+# release build of the target dir cargo builds into (CARGO_TARGET_DIR honoured), built if
+# missing; the tests read its path from SIFTLAB_CLI.
+if [ -z "${SIFTLAB_CLI:-}" ]; then
+    TARGET="${CARGO_TARGET_DIR:-target}"
+    case "$TARGET" in /*) ;; *) TARGET="$ROOT/$TARGET" ;; esac
+    export SIFTLAB_CLI="$TARGET/release/siftlab"
+    if [ ! -x "$SIFTLAB_CLI" ]; then
+        cargo build --release --bin siftlab
+    fi
 fi
+export SIFTLAB_CLI
 
 cd "$HERE"
 ENGINES="${E2E_ENGINES:-chromium firefox webkit}"

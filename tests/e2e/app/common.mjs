@@ -22,6 +22,13 @@ export const VO_LAST = Number(process.env.E2E_VO_FRAME_ID || ({ webkit: 9, firef
 // The frame whose counts and picture the odometry case checks: in the turn (frame 110)
 // when the run reaches it.
 export const VO_SHOWN = Math.min(110, VO_LAST);
+// The comparison view's FRAME_ID: four runs at once, so at most 29 in every engine. What it
+// adds to the single runs above is that the four trackers run side by side and their rows,
+// note and plot are the CLI's; each row's figures are the core's metrics, which the matcher
+// case checks on 0-150 (KITTI included) in Chromium, and its KITTI cells' text is
+// `metric_cells`'s (unit-tested with and without KITTI figures). The frame-96 dt 200 RANSAC
+// sample is core/tests/essential_matrix.rs's, in Chromium too.
+export const COMPARE_LAST = Number(process.env.E2E_COMPARE_FRAME_ID || Math.min(VO_LAST, 29));
 // Whether the engine validates relaxed SIMD (measured: Chromium 156 and Firefox 153 do,
 // WebKitGTK 2.50 does not), i.e. which worker build www/worker.js must pick.
 export const RELAXED = { chromium: true, firefox: true, webkit: false }[ENGINE];
