@@ -6,6 +6,7 @@
 // too) and that nothing was logged as an error by the page or thrown by its workers.
 import assert from 'node:assert/strict';
 import { execFileSync, spawnSync } from 'node:child_process';
+import crypto from 'node:crypto';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
@@ -147,11 +148,34 @@ export function pngDeclaring(w, h) {
 }
 
 // The CLI's view_trajectory with `args` in a scratch folder: its files and stderr.
+// The CLI's answers within one run of tests/e2e/run.sh, shared by its suites (E2E_CLI_CACHE
+// names a folder of that run, deleted with it): the three engines mark the same files on the
+// same seed and the comparison asks the same runs, and the CLI's output depends only on its
+// arguments and inputs. Without the folder, every call runs the CLI.
+export function cliCached(key, compute) {
+  const dir = process.env.E2E_CLI_CACHE;
+  if (!dir) return compute();
+  const file = path.join(dir, crypto.createHash('sha256').update(JSON.stringify([CLI, key])).digest('hex') + '.json');
+  try {
+    return JSON.parse(fs.readFileSync(file, 'utf8'));
+  } catch {
+    // Not there yet: the first suite to ask computes it (two at once both do; the rename is whole).
+  }
+  const value = compute();
+  const tmp = `${file}.${process.pid}.tmp`;
+  fs.writeFileSync(tmp, JSON.stringify(value));
+  fs.renameSync(tmp, file);
+  return value;
+}
+
 export function cliTrajectory(args) {
-  const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo24-'));
-  const vo = spawnSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', ...args, '--metrics', 'm.json', '--plot', 'plot.svg'], { cwd: tmp, encoding: 'utf8' });
-  assert.equal(vo.status, 0, vo.stderr);
-  const out = { stderr: vo.stderr, metrics: JSON.parse(fs.readFileSync(path.join(tmp, 'm.json'), 'utf8')), svg: fs.readFileSync(path.join(tmp, 'plot.svg')) };
-  fs.rmSync(tmp, { recursive: true });
-  return out;
+  const out = cliCached(['view_trajectory', DATASET, ...args], () => {
+    const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo24-'));
+    const vo = spawnSync(CLI, ['-d', path.join(ROOT, DATASET), 'view_trajectory', ...args, '--metrics', 'm.json', '--plot', 'plot.svg'], { cwd: tmp, encoding: 'utf8' });
+    assert.equal(vo.status, 0, vo.stderr);
+    const r = { stderr: vo.stderr, metrics: JSON.parse(fs.readFileSync(path.join(tmp, 'm.json'), 'utf8')), svg: fs.readFileSync(path.join(tmp, 'plot.svg')).toString('base64') };
+    fs.rmSync(tmp, { recursive: true });
+    return r;
+  });
+  return { ...out, svg: Buffer.from(out.svg, 'base64') };
 }

@@ -10,7 +10,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { ROOT } from '../harness.mjs';
 import {
-  appSuite, CLI, DATASET, shot, metrics, LANES, BASE, page, tid, idle,
+  appSuite, CLI, DATASET, cliCached, shot, metrics, LANES, BASE, page, tid, idle,
 } from './common.mjs';
 
 appSuite();
@@ -23,9 +23,9 @@ appSuite();
 const MARK_N = Number(process.env.E2E_MARK_N || 1);
 const MARKS = path.join(ROOT, 'tests/fixtures/mark');
 function cliMark(variant, n, seed) {
-  const r = spawnSync(CLI, ['--opencv-lanes', String(LANES), '-d', DATASET, 'mark', path.join(MARKS, variant, 'vision_tasks.py'),
-    '-n', String(n), '--seed', String(seed), '--json'], { cwd: ROOT, encoding: 'utf8', maxBuffer: 1 << 26 });
-  return JSON.parse(r.stdout);
+  const args = ['--opencv-lanes', String(LANES), '-d', DATASET, 'mark', path.join(MARKS, variant, 'vision_tasks.py'),
+    '-n', String(n), '--seed', String(seed), '--json'];
+  return cliCached(args, () => JSON.parse(spawnSync(CLI, args, { cwd: ROOT, encoding: 'utf8', maxBuffer: 1 << 26 }).stdout));
 }
 async function markFile(variant, n, seed, { file } = {}) {
   await page.goto(`${BASE}?lanes=${LANES}&mark=${seed}&mn=${n}`);
