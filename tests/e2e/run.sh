@@ -9,7 +9,7 @@
 # (harness.mjs), checked against the native CLI, and the accessibility checks (a11y.test.mjs:
 # axe-core, 390 px, colour-vision screenshots); and in Chromium, Playwright's extras
 # (chromium-extras.test.mjs), the worker counts (workers.test.mjs: workers=1, 2, 3, 8 give
-# the CLI's poses) and the odometry's memory over 600 frames (vo-memory.test.mjs).
+# the CLI's poses) and the odometry's memory over 400 frames (vo-memory.test.mjs).
 #   E2E_ENGINES="chromium webkit" tests/e2e/run.sh      a subset of engines
 #   E2E_LANES=1 tests/e2e/run.sh                        one suite at a time
 # Two lanes run side by side by default, each taking the next suite from one queue (longest
@@ -100,7 +100,7 @@ for s in "webkit app/" "chromium app/" "firefox app/" "webkit a11y.test.mjs" "ch
 done
 # The files of each suite: app/ is one node --test run of every view's file; in Chromium,
 # Playwright's extras (what WebDriver cannot see), workers=1, 2, 3, 8 (the odometry's and the
-# comparison's poses equal the CLI's) and a 600-frame folder (the renderer's memory does not
+# comparison's poses equal the CLI's) and a 400-frame folder (the renderer's memory does not
 # grow with the run's length).
 run_suite() {
     case "$2" in
