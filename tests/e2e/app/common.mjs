@@ -25,7 +25,7 @@ export const VO_LAST = Number(process.env.E2E_VO_FRAME_ID || ({ webkit: 9, firef
 export const VO_SHOWN = Math.min(110, VO_LAST);
 // The comparison view's FRAME_ID: four runs at once, so at most 29 in every engine. What it
 // adds to the single runs above is that the four trackers run side by side and their rows,
-// note and plot are the CLI's; each row's figures are the core's metrics, which the matcher
+// note and plot are the CLI's; each row's figures are the core's metrics, which the LK
 // case checks on 0-150 (KITTI included) in Chromium, and its KITTI cells' text is
 // `metric_cells`'s (unit-tested with and without KITTI figures). The frame-96 dt 200 RANSAC
 // sample is core/tests/essential_matrix.rs's, in Chromium too.
@@ -147,7 +147,6 @@ export function pngDeclaring(w, h) {
     chunk('IDAT', Buffer.from([0x78, 0x9c, 0x03, 0x00, 0x00, 0x00, 0x00, 0x01])), chunk('IEND', Buffer.alloc(0))]);
 }
 
-// The CLI's view_trajectory with `args` in a scratch folder: its files and stderr.
 // The CLI's answers within one run of tests/e2e/run.sh, shared by its suites (E2E_CLI_CACHE
 // names a folder of that run, deleted with it): the three engines mark the same files on the
 // same seed and the comparison asks the same runs, and the CLI's output depends only on its
@@ -168,6 +167,7 @@ export function cliCached(key, compute) {
   return value;
 }
 
+// The CLI's view_trajectory with `args` in a scratch folder: its files and stderr.
 export function cliTrajectory(args) {
   const out = cliCached(['view_trajectory', DATASET, ...args], () => {
     const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo24-'));
