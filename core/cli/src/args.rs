@@ -45,6 +45,28 @@ pub enum Command {
     MatchAll(MatchAllArgs),
     /// Mark a student's vision_tasks.py as the lab's automarker does (python3 in a bubblewrap sandbox).
     Mark(MarkArgs),
+    /// Write an autograder for a course platform (gradescope): the files and a zip to upload.
+    Autograder(AutograderArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct AutograderArgs {
+    /// The platform the autograder is for.
+    #[arg(value_parser = ["gradescope"])]
+    pub platform: String,
+    /// A new (or empty) folder for the autograder's files and autograder.zip.
+    #[arg(long, value_name = "DIR")]
+    pub out: PathBuf,
+    /// The seed of the cases every submission is marked on.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Calls per task.
+    #[arg(short = 'n', long = "cases", default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub n: u32,
+    /// The siftlab binary to bundle (default: this one). Gradescope's image is Ubuntu 22.04:
+    /// give a static build (x86_64-unknown-linux-musl) when this one needs a newer C library.
+    #[arg(long, value_name = "PATH")]
+    pub binary: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]

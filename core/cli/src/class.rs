@@ -95,6 +95,12 @@ fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
     let key = RunKey { seed: a.seed, n, dataset, frames };
     let runner = Runner::new(a.no_sandbox)?;
     let jobs = a.jobs.map_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()), |j| j as usize);
+    if jobs > crate::sandbox::MAX_JOBS as usize {
+        return Err(Error::InvalidArgument(format!(
+            "--jobs {jobs}: at most {} students are marked at once",
+            crate::sandbox::MAX_JOBS
+        )));
+    }
     eprintln!(
         "marking {} student(s) into {}: {n} calls per task, seed {}, {} job(s); SIFT of {} frame pair(s) in {:.1} s",
         students.len(),
@@ -195,6 +201,7 @@ fn mark_student(
     job: u32,
 ) -> Row {
     let dir = student_dir(out, &s.id);
+    let started = std::time::Instant::now();
     // Read as the tree was found: no link followed, no FIFO waited on, at
     // most the size limit + 1 bytes; else the entry is refused, unmarked.
     let source = match &s.file {
@@ -226,13 +233,16 @@ fn mark_student(
         }
     };
     let row = Row::of(&s.id, &marks, status, &reason);
+    // Where the file ran ("not run": refused, or none found, before any run).
+    let tier = if s.file.is_some() && marks.rejection.is_none() { runner.tier.name() } else { "not run" };
     let head = format!(
-        "{{\"student\": {}, \"status\": \"{}\", \"reason\": {}, \"sha256\": \"{sha}\", \"dataset\": \"{}\", \"siftlab\": \"{}\", ",
+        "{{\"student\": {}, \"status\": \"{}\", \"reason\": {}, \"sha256\": \"{sha}\", \"dataset\": \"{}\", \"siftlab\": \"{}\", \"sandbox\": \"{}\", ",
         Json::Str(s.id.clone()).to_json(),
         status.name(),
         Json::Str(reason.clone()).to_json(),
         key.dataset,
-        env!("CARGO_PKG_VERSION")
+        env!("CARGO_PKG_VERSION"),
+        tier
     );
     let report = report_json(&marks);
     let json = format!("{head}{}\n", report.strip_prefix('{').unwrap_or(&report));
@@ -245,7 +255,7 @@ fn mark_student(
     let files = [
         (SEAL_FILE, seal.tag(&s.id, json.as_bytes())),
         ("report.txt", text.clone()),
-        ("results.json", gradescope_json(&marks, &text, s.file.is_none())),
+        ("results.json", gradescope_json(&marks, &text, s.file.is_none(), tier, started.elapsed().as_secs_f64())),
         ("report.json", json),
     ];
     let written = std::fs::create_dir_all(&dir)

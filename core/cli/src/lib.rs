@@ -8,9 +8,11 @@
 
 pub mod anatomy;
 pub mod args;
+mod autograder;
 mod cgroup;
 pub mod class;
 pub mod common;
+mod container;
 mod harness_io;
 pub mod mark;
 pub mod match_all;
@@ -22,6 +24,7 @@ mod seccomp;
 mod submissions;
 pub mod trajectory;
 pub mod visual;
+mod zip;
 
 pub use args::{AnatomyArgs, Cli, Command, MarkArgs, MatchAllArgs, MatchArgs, SiftArgs, TrajectoryArgs};
 use clap::Parser;
@@ -159,6 +162,7 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Anatomy(a) => anatomy::run(&a.image, &sift_params(cli), a.json, a.out.as_deref()),
         Command::MatchAll(a) => match_all::run(cli, a),
         Command::Mark(a) => mark::run(cli, a).map(|_| ()),
+        Command::Autograder(a) => autograder::run(cli, a),
     }
 }
 

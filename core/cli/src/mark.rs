@@ -12,7 +12,7 @@ use crate::args::{Cli, MarkArgs};
 use crate::common::{open_dataset, sift_params};
 use crate::harness_io::{read_lines, FromHarness, TempDir, LINES_QUEUED};
 use crate::report_files::{atomic_write, gradescope_json, sha256_hex};
-use crate::sandbox::{self, Python};
+use crate::sandbox::{self, Python, Tier};
 use siftlab_core::dataset::Dataset;
 use siftlab_core::error::{Error, Result};
 use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
@@ -62,6 +62,7 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
     if a.jobs.is_some() || a.resume || a.shard.is_some() {
         return Err(Error::InvalidArgument("--jobs, --resume and --shard go with --out DIR (a class)".into()));
     }
+    let started = std::time::Instant::now();
     // A folder (Gradescope's /autograder/submission): its first vision_tasks.py.
     let file = crate::submissions::single(arg)?;
     let n = a.n as usize;
@@ -71,12 +72,16 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         if let Some(g) = &a.gradescope {
             let text =
                 format!("{}: 0.00 / 20\nscores 0: no vision_tasks.py was found in the submission\n", arg.display());
-            atomic_write(g, gradescope_json(&marks, &text, true).as_bytes())?;
+            atomic_write(
+                g,
+                gradescope_json(&marks, &text, true, "not run", started.elapsed().as_secs_f64()).as_bytes(),
+            )?;
         }
         return Ok(marks);
     };
     let name = file.file_name().map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
     let src = crate::submissions::read_single(arg, &file)?;
+    let mut tier = "not run";
     let marks = match crate::submissions::checked(&src) {
         Err(rejection) => {
             eprintln!("siftlab: {name} scores 0: {rejection}");
@@ -86,6 +91,7 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
             let ds = open_dataset(cli)?;
             let frames = frame_ids(&ds)?;
             let runner = Runner::new(a.no_sandbox)?;
+            tier = runner.tier.name();
             eprintln!(
                 "marking {name}: {n} calls per task, seed {}, frames 1 to {} of {}",
                 a.seed,
@@ -107,7 +113,7 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
     }
     let _ = out.flush();
     if let Some(g) = &a.gradescope {
-        atomic_write(g, gradescope_json(&marks, &text, false).as_bytes())?;
+        atomic_write(g, gradescope_json(&marks, &text, false, tier, started.elapsed().as_secs_f64()).as_bytes())?;
     }
     Ok(marks)
 }
@@ -165,12 +171,50 @@ pub(crate) fn frame_ids(ds: &Dataset) -> Result<Vec<u32>> {
     Ok((1..count).collect())
 }
 
+/// The strongest sandbox that works here: bubblewrap; where it cannot
+/// make namespaces (a container) and siftlab runs as root, the container
+/// tier. `SIFTLAB_SANDBOX=container` picks the container tier (as the
+/// platforms' simulations and tests do on a machine with bubblewrap).
+fn pick_tier(python: &Python, dir: &std::path::Path) -> Result<Tier> {
+    #[cfg(not(target_os = "linux"))]
+    return Err(Error::InvalidArgument(
+        "no sandbox on this system (siftlab mark sandboxes with bubblewrap, on Linux): \
+         pass --no-sandbox to check your own file with your own rights"
+            .into(),
+    ));
+    let forced = std::env::var("SIFTLAB_SANDBOX").ok();
+    let bwrap = match forced.as_deref() {
+        Some("container") => Err("SIFTLAB_SANDBOX=container".to_string()),
+        Some("bubblewrap") | None => sandbox::check(python, dir, Tier::Bubblewrap),
+        Some(other) => {
+            return Err(Error::InvalidArgument(format!(
+                "SIFTLAB_SANDBOX={}: use bubblewrap or container (or unset it: the strongest that works)",
+                escaped(other, 40)
+            )))
+        }
+    };
+    let Err(why) = bwrap else { return Ok(Tier::Bubblewrap) };
+    if forced.as_deref() != Some("bubblewrap") && crate::container::possible() {
+        return match sandbox::check(python, dir, Tier::Container) {
+            Ok(()) => Ok(Tier::Container),
+            Err(e) => Err(Error::InvalidArgument(format!(
+                "no usable sandbox here: bubblewrap: {why}; the container tier: {e}"
+            ))),
+        };
+    }
+    Err(Error::InvalidArgument(format!(
+        "no usable sandbox here ({why}): siftlab mark runs student files in bubblewrap (apt install \
+         bubblewrap; user namespaces must be allowed) or, as root inside a container (Gradescope, \
+         PrairieLearn), as a uid of their own. Pass --no-sandbox only to check your own file"
+    )))
+}
+
 /// Starts harness processes: the interpreter found outside, the harness
 /// files, sandboxed or (with `--no-sandbox`) not.
 pub(crate) struct Runner {
     python: Python,
     dir: TempDir,
-    sandbox: bool,
+    pub(crate) tier: Tier,
     /// Each harness gets a cgroup of its own (crate::cgroup).
     cgroups: bool,
 }
@@ -185,29 +229,17 @@ impl Runner {
             std::fs::write(&path, text)
                 .map_err(|e| Error::InvalidArgument(format!("cannot write {}: {e}", path.display())))?;
         }
-        if no_sandbox {
+        let tier = if no_sandbox {
             eprintln!(
                 "siftlab: --no-sandbox: the file runs with your own rights (your files, network, processes); \
-                 use it only for your own file, or inside a container that is itself the sandbox"
+                 use it only to check your own file"
             );
+            Tier::None
         } else {
-            #[cfg(not(target_os = "linux"))]
-            return Err(Error::InvalidArgument(
-                "no sandbox on this system (siftlab mark sandboxes with bubblewrap, on Linux): \
-                 pass --no-sandbox to run the file with your own rights"
-                    .into(),
-            ));
-            sandbox::check(&python, &dir.0).map_err(|why| {
-                Error::InvalidArgument(format!(
-                    "no usable sandbox here ({why}): siftlab mark runs student files in bubblewrap \
-                     (apt install bubblewrap; user namespaces must be allowed). Pass --no-sandbox to run \
-                     the file with your own rights (only your own file, or inside a container that is \
-                     itself the sandbox)"
-                ))
-            })?;
-        }
+            pick_tier(&python, &dir.0)?
+        };
         let cgroups = crate::cgroup::usable_or_say_why(sandbox::MEMORY_BYTES, sandbox::PROCESSES);
-        Ok(Runner { python, dir, sandbox: !no_sandbox, cgroups })
+        Ok(Runner { python, dir, tier, cgroups })
     }
 
     /// Marks `source` on pairs computed beforehand (those of the plan of
@@ -231,7 +263,7 @@ impl Runner {
     /// ended by its `Drop` on the way out, and a class marks the next student.
     fn mark(&self, session: Session, pairs: &[Pair], job: u32, verbose: bool) -> Result<Marks> {
         let marking = std::panic::AssertUnwindSafe(|| self.mark_unguarded(session, pairs, job, verbose));
-        std::panic::catch_unwind(marking).unwrap_or_else(|panic| {
+        let marks = std::panic::catch_unwind(marking).unwrap_or_else(|panic| {
             let why = panic
                 .downcast_ref::<&str>()
                 .map(|s| s.to_string())
@@ -241,7 +273,18 @@ impl Runner {
                 "siftlab failed while marking this file (a fault of siftlab's, please report it): {}",
                 escaped(&why, 300)
             )))
-        })
+        });
+        // The container tier's last word: no process of the marking uid may
+        // exist when the mark is written (one that does could write after it).
+        let uid = sandbox::marking_uid(job);
+        if self.tier == Tier::Container && !crate::container::kill_uid(uid) {
+            return Err(Error::InvalidArgument(format!(
+                "a process of the marking uid {uid} survived SIGKILL (pids {:?}): no mark is written; \
+                 run the marking again",
+                crate::container::processes_of(uid)
+            )));
+        }
+        marks
     }
 
     fn mark_unguarded(&self, mut session: Session, pairs: &[Pair], job: u32, verbose: bool) -> Result<Marks> {
@@ -251,7 +294,11 @@ impl Runner {
                 self.python.exe.display(),
                 self.python.version,
                 self.python.numpy.as_ref().map_or("no numpy".into(), |v| format!("numpy {v}")),
-                if self.sandbox { "sandboxed (bubblewrap)" } else { "NOT sandboxed" }
+                match self.tier {
+                    Tier::Bubblewrap => "sandboxed (bubblewrap)",
+                    Tier::Container => "sandboxed (container tier: its own uid, seccomp)",
+                    Tier::None => "NOT sandboxed",
+                }
             );
         }
         let mut harness: Option<Harness> = None;
@@ -273,7 +320,7 @@ impl Runner {
                 Step::Start => {
                     drop(harness.take());
                     setup.clear();
-                    harness = Some(Harness::start(&self.python, &self.dir.0, self.sandbox, job, self.cgroups)?);
+                    harness = Some(Harness::start(&self.python, &self.dir.0, self.tier, job, self.cgroups)?);
                     session.started();
                 }
                 Step::Send { id, line, limit, op, pair } => {
@@ -346,18 +393,30 @@ struct Harness {
     to_child: Option<SyncSender<Vec<u8>>>,
     lines: Receiver<FromHarness>,
     stderr: Arc<Mutex<Vec<u8>>>,
+    /// The container tier's uid (every process of it is killed with the
+    /// harness) and private folder (removed after).
+    uid: Option<u32>,
+    _scratch: Option<crate::container::Scratch>,
 }
 
 impl Harness {
-    fn start(python: &Python, dir: &std::path::Path, sandbox: bool, job: u32, cgroup: bool) -> Result<Harness> {
+    fn start(python: &Python, dir: &std::path::Path, tier: Tier, job: u32, cgroup: bool) -> Result<Harness> {
         let cgroup = if cgroup {
             let g = crate::cgroup::Cgroup::create(job, sandbox::MEMORY_BYTES, sandbox::PROCESSES);
             Some(g.map_err(|e| Error::InvalidArgument(format!("cannot make the sandbox's cgroup: {e}")))?)
         } else {
             None
         };
+        // The container tier's private folder, owned by the marking uid.
+        let scratch = match tier {
+            Tier::Container => Some(
+                crate::container::Scratch::new(sandbox::marking_uid(job))
+                    .map_err(|e| Error::InvalidArgument(format!("cannot make the sandbox's folder: {e}")))?,
+            ),
+            _ => None,
+        };
         let mut child = python
-            .command(dir, sandbox, job, cgroup.as_ref())
+            .command(dir, tier, job, cgroup.as_ref(), scratch.as_ref().map_or(dir, |s| s.path()))
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -405,6 +464,8 @@ impl Harness {
             to_child: Some(to_child),
             lines,
             stderr: tail,
+            uid: scratch.is_some().then_some(sandbox::marking_uid(job)),
+            _scratch: scratch,
         })
     }
 
@@ -530,12 +591,16 @@ impl Harness {
         }
     }
 
-    /// Ends the sandbox: every process in it.
+    /// Ends the sandbox: every process in it (in the container tier, every
+    /// process of its uid: a daemon left by `setsid` is no longer its child).
     fn kill(&mut self) {
         self.to_child = None;
         self.meter.kill();
         let _ = self.child.kill();
         let _ = self.child.wait();
+        if let Some(uid) = self.uid {
+            crate::container::kill_uid(uid);
+        }
     }
 
     /// Ends the process normally (stdin closed, it returns), then makes

@@ -210,7 +210,9 @@ fn records(text: &str) -> std::result::Result<Vec<Vec<String>>, String> {
 
 /// Gradescope's results.json: the score out of 20, the report as its
 /// output, and one test per task with that task's failed cases.
-pub fn gradescope_json(m: &Marks, report: &str, none_found: bool) -> String {
+/// `sandbox` names the tier the file ran in (`Tier::name`, or "not run"
+/// for a file refused before running); `seconds` is the marking's wall time.
+pub fn gradescope_json(m: &Marks, report: &str, none_found: bool, sandbox: &str, seconds: f64) -> String {
     let tests: Vec<Json> = Task::ALL
         .iter()
         .map(|&t| {
@@ -234,11 +236,15 @@ pub fn gradescope_json(m: &Marks, report: &str, none_found: bool) -> String {
                     out.push_str(&format!("\n  expected: {}\n  returned: {}", r.expected, r.returned));
                 }
             }
+            let score = tm.map_or(0.0, |x| (x.marks * 100.0).round() / 100.0);
             Json::Obj(vec![
                 ("name".into(), Json::Str(t.name().into())),
-                ("score".into(), Json::Float(tm.map_or(0.0, |x| (x.marks * 100.0).round() / 100.0))),
+                ("score".into(), Json::Float(score)),
                 ("max_score".into(), Json::Float(5.0)),
+                // Gradescope colours a test by it (passed: full marks).
+                ("status".into(), Json::Str(if score >= 5.0 { "passed" } else { "failed" }.into())),
                 ("output".into(), Json::Str(out)),
+                ("output_format".into(), Json::Str("text".into())),
                 ("visibility".into(), Json::Str("visible".into())),
             ])
         })
@@ -246,9 +252,24 @@ pub fn gradescope_json(m: &Marks, report: &str, none_found: bool) -> String {
     let top = Json::Obj(vec![
         ("score".into(), Json::Float((m.total * 100.0).round() / 100.0)),
         ("max_score".into(), Json::Float(20.0)),
-        ("output".into(), Json::Str(report.to_string())),
+        (
+            "output".into(),
+            Json::Str(format!("{report}\nmarked by siftlab {} (sandbox: {sandbox})\n", env!("CARGO_PKG_VERSION"))),
+        ),
+        ("output_format".into(), Json::Str("text".into())),
         ("visibility".into(), Json::Str("visible".into())),
+        ("execution_time".into(), Json::Float((seconds * 10.0).round() / 10.0)),
         ("tests".into(), Json::Arr(tests)),
+        // Gradescope keeps extra_data with the result, unread: how it was marked.
+        (
+            "extra_data".into(),
+            Json::Obj(vec![
+                ("sandbox".into(), Json::Str(sandbox.into())),
+                ("siftlab".into(), Json::Str(env!("CARGO_PKG_VERSION").into())),
+                ("seed".into(), Json::Float(m.seed as f64)),
+                ("n".into(), Json::Float(m.cases_per_task as f64)),
+            ]),
+        ),
     ]);
     format!("{}\n", top.to_json())
 }

@@ -15,12 +15,57 @@ use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
+/// Which sandbox a harness runs in (docs/marking.md, "Tiers"), named in
+/// the report and in results.json.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tier {
+    /// bubblewrap's namespaces (a machine siftlab's teacher runs).
+    Bubblewrap,
+    /// An unprivileged uid, no new privileges and seccomp (container.rs):
+    /// inside a container that forbids namespaces, siftlab running as root.
+    Container,
+    /// `--no-sandbox`: the file runs with the caller's rights.
+    None,
+}
+
+impl Tier {
+    pub fn name(self) -> &'static str {
+        match self {
+            Tier::Bubblewrap => "bubblewrap",
+            Tier::Container => "container",
+            Tier::None => "none",
+        }
+    }
+}
+
 /// Where the harness lives inside the sandbox.
 pub const BOX: &str = "/box";
-/// The uid the harness of job 0 takes when siftlab runs as root
-/// (RLIMIT_NPROC does not hold for root): one no account uses; job j takes
-/// MARK_UID + j, so the process limit of one student's sandbox is its own.
-pub const MARK_UID: u32 = 61_000;
+/// Concurrent jobs of one run at most: each takes a uid of the run's block.
+pub const MAX_JOBS: u32 = 256;
+
+/// The uid the harness of job `job` takes when siftlab runs as root
+/// (RLIMIT_NPROC does not hold for root; the container tier kills every
+/// process of it at the end): one no account uses, in a block of MAX_JOBS
+/// picked at random once per siftlab process, so two markings on one
+/// machine (two classes, the tests) never share a uid and neither can
+/// count towards, or kill, the other's processes.
+pub fn marking_uid(job: u32) -> u32 {
+    static BLOCK: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
+    let block = *BLOCK.get_or_init(|| {
+        let mut b = [0u8; 4];
+        let random = std::fs::File::open("/dev/urandom").and_then(|mut f| std::io::Read::read_exact(&mut f, &mut b));
+        let r = if random.is_ok() {
+            u32::from_ne_bytes(b)
+        } else {
+            let nanos =
+                std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0, |d| d.subsec_nanos());
+            std::process::id() ^ nanos
+        };
+        // 2^22 blocks above 100000 (under 2^31: every tool reads such a uid).
+        100_000 + (r % (1 << 22)) * MAX_JOBS
+    });
+    block + job % MAX_JOBS
+}
 
 /// Limits on the whole sandbox.
 pub const MEMORY_BYTES: u64 = 4 << 30;
@@ -164,30 +209,52 @@ impl Python {
         })
     }
 
-    /// The command that runs `harness_dir/siftlab_harness.py` sandboxed
-    /// (`sandbox`) or as a plain child (`--no-sandbox`), with the limits
-    /// set before it starts.
-    /// With `cgroup`, the harness joins it before exec (everything it
-    /// starts is inside); sandboxed, bubblewrap installs the seccomp filter.
-    pub fn command(&self, harness_dir: &Path, sandbox: bool, job: u32, cgroup: Option<&Cgroup>) -> Command {
-        self.build(harness_dir, sandbox, job, cgroup, false)
+    /// The command that runs `harness_dir/siftlab_harness.py` in `tier`,
+    /// with the limits set before it starts. With `cgroup`, the harness
+    /// joins it before exec (everything it starts is inside); in bubblewrap,
+    /// bubblewrap installs the seccomp filter, in the container tier the
+    /// child does, after taking the marking uid, with `scratch` (owned by
+    /// that uid) as its working folder.
+    pub fn command(
+        &self,
+        harness_dir: &Path,
+        tier: Tier,
+        job: u32,
+        cgroup: Option<&Cgroup>,
+        scratch: &Path,
+    ) -> Command {
+        self.build(harness_dir, tier, job, cgroup, scratch, false)
     }
 
     /// The command; with `probe`, the same sandbox runs the interpreter's
     /// `-c "import math, json"` instead of the harness.
-    fn build(&self, harness_dir: &Path, sandbox: bool, job: u32, cgroup: Option<&Cgroup>, probe: bool) -> Command {
+    fn build(
+        &self,
+        harness_dir: &Path,
+        tier: Tier,
+        job: u32,
+        cgroup: Option<&Cgroup>,
+        scratch: &Path,
+        probe: bool,
+    ) -> Command {
         let root = is_root();
+        let sandbox = tier == Tier::Bubblewrap;
         // The filter's bytes in a pipe bubblewrap reads (`--seccomp FD`);
         // the read end is kept by the command and opened to the child only.
-        let seccomp_fd =
-            if sandbox { crate::seccomp::native().and_then(|a| pipe_with(&crate::seccomp::program(a))) } else { None };
+        let seccomp_fd = if sandbox {
+            crate::seccomp::native().and_then(|a| pipe_with(&crate::seccomp::program(a, false)))
+        } else {
+            None
+        };
+        // The container tier's entry (uid, filter), made before the fork.
+        let enter = if tier == Tier::Container { crate::container::Enter::new(marking_uid(job)) } else { None };
         let mut harness_args: Vec<OsString> = vec!["-I".into(), "-S".into(), "-B".into(), "-u".into()];
         let mut cmd = if sandbox {
             let mut c = Command::new("bwrap");
             c.args(["--unshare-pid", "--unshare-net", "--unshare-ipc", "--unshare-uts", "--unshare-cgroup-try"]);
             if root {
                 // Root: no user namespace, so the harness can leave uid 0 for
-                // MARK_UID (RLIMIT_NPROC then counts); that needs these two.
+                // its marking uid (RLIMIT_NPROC then counts); that needs these two.
                 c.args(["--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]);
             } else {
                 c.args(["--unshare-user", "--cap-drop", "ALL"]);
@@ -225,13 +292,19 @@ impl Python {
             c.arg(&self.exe);
             harness_args.push(format!("{BOX}/siftlab_harness.py").into());
             if root {
-                harness_args.extend(["--drop-uid".into(), (MARK_UID + job).to_string().into()]);
+                harness_args.extend(["--drop-uid".into(), marking_uid(job).to_string().into()]);
             }
             c
         } else {
             let mut c = Command::new(&self.exe);
-            c.current_dir(harness_dir).env_clear();
+            c.env_clear();
             c.env("OPENBLAS_NUM_THREADS", "1").env("OMP_NUM_THREADS", "1");
+            if tier == Tier::Container {
+                // Its one writable folder: no file of siftlab's is there.
+                c.current_dir(scratch).env("HOME", scratch).env("TMPDIR", scratch);
+            } else {
+                c.current_dir(harness_dir);
+            }
             harness_args.push(harness_dir.join("siftlab_harness.py").into());
             c
         };
@@ -243,7 +316,7 @@ impl Python {
             harness_args = ["-I", "-S", "-c", "import math, json"].map(OsString::from).to_vec();
         }
         cmd.args(harness_args);
-        let limit_processes = sandbox;
+        let limit_processes = tier != Tier::None;
         let join = cgroup.map(Cgroup::join_files).unwrap_or_default();
         // SAFETY: only async-signal-safe calls (open, write, close, fcntl,
         // setrlimit, setsid) between fork and exec; nothing allocates.
@@ -273,6 +346,9 @@ impl Python {
                 }
                 // Its own session and process group: killed as one even without the sandbox.
                 libc::setsid();
+                if let Some(e) = &enter {
+                    e.apply()?;
+                }
                 Ok(())
             });
         }
@@ -280,17 +356,30 @@ impl Python {
     }
 }
 
-/// Whether bubblewrap can build the sandbox here (a real run of `true`
-/// through it); `Err` says why not.
-pub fn check(python: &Python, harness_dir: &Path) -> std::result::Result<(), String> {
-    let mut c = python.build(harness_dir, true, 0, None, true);
+/// Whether `tier` can run the interpreter here (a real run of it through
+/// the sandbox); `Err` says why not.
+pub fn check(python: &Python, harness_dir: &Path, tier: Tier) -> std::result::Result<(), String> {
+    let scratch = match tier {
+        Tier::Container => {
+            Some(crate::container::Scratch::new(marking_uid(0)).map_err(|e| format!("cannot make its folder: {e}"))?)
+        }
+        _ => None,
+    };
+    let dir = scratch.as_ref().map_or(harness_dir, |s| s.path());
+    let mut c = python.build(harness_dir, tier, 0, None, dir, true);
     match c.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).output() {
         Ok(o) if o.status.success() => Ok(()),
         Ok(o) => Err(siftlab_mark::escaped(String::from_utf8_lossy(&o.stderr).trim(), 300)),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+        Err(e) if tier == Tier::Bubblewrap && e.kind() == std::io::ErrorKind::NotFound => {
             Err("bwrap (bubblewrap) is not installed: apt install bubblewrap".into())
         }
-        Err(e) => Err(format!("cannot run bwrap: {e}")),
+        Err(e) if tier == Tier::Bubblewrap => Err(format!("cannot run bwrap: {e}")),
+        Err(e) if e.kind() == std::io::ErrorKind::PermissionDenied => Err(format!(
+            "the marking uid cannot run {} ({e}): it must be where every user may run it (not under /root); \
+             set SIFTLAB_PYTHON to such a python3",
+            python.exe.display()
+        )),
+        Err(e) => Err(format!("cannot start the interpreter as uid {}: {e}", marking_uid(0))),
     }
 }
 

@@ -75,6 +75,9 @@ pub struct Arch {
     pub abi_bit: Option<u32>,
     pub clone: u32,
     pub clone3: u32,
+    /// socket(2): denied whole in the container tier (no network namespace
+    /// hides the network there); its pipes are all the harness needs.
+    pub socket: u32,
     pub numbers: &'static [(&'static str, u32)],
 }
 
@@ -83,6 +86,7 @@ pub const X86_64: Arch = Arch {
     abi_bit: Some(0x4000_0000),
     clone: 56,
     clone3: 435,
+    socket: 41,
     numbers: &[
         ("unshare", 272),
         ("setns", 308),
@@ -136,6 +140,7 @@ pub const AARCH64: Arch = Arch {
     abi_bit: None,
     clone: 220,
     clone3: 435,
+    socket: 198,
     numbers: &[
         ("unshare", 97),
         ("setns", 268),
@@ -207,11 +212,15 @@ const OFF_ARCH: u32 = 4;
 const OFF_ARG0: u32 = 16;
 
 /// The program for `arch`, as the bytes of `struct sock_filter[]` that
-/// bubblewrap reads from `--seccomp FD`.
-pub fn program(arch: &Arch) -> Vec<u8> {
+/// bubblewrap reads from `--seccomp FD`; with `no_sockets` (the container
+/// tier, container.rs) socket(2) is denied too.
+pub fn program(arch: &Arch, no_sockets: bool) -> Vec<u8> {
     // (code, jt, jf, k); jumps are counted from the next instruction.
     let mut p: Vec<(u16, u8, u8, u32)> = Vec::new();
-    let denied: Vec<u32> = arch.numbers.iter().map(|(_, n)| *n).collect();
+    let mut denied: Vec<u32> = arch.numbers.iter().map(|(_, n)| *n).collect();
+    if no_sockets {
+        denied.push(arch.socket);
+    }
     // Layout after the checks: [ALLOW] [clone: LD arg0, JSET, ALLOW] [EPERM] [ENOSYS].
     // Each jump's distance is from its own position to these labels.
     let checks = 3 + usize::from(arch.abi_bit.is_some()) + denied.len() + 2;
@@ -315,12 +324,13 @@ mod tests {
         }
         assert_eq!(i64::from(arch.clone), libc::SYS_clone as i64);
         assert_eq!(i64::from(arch.clone3), libc::SYS_clone3 as i64);
+        assert_eq!(i64::from(arch.socket), libc::SYS_socket as i64);
     }
 
     #[test]
     fn every_jump_lands_inside_the_program() {
-        for arch in [&X86_64, &AARCH64] {
-            let p = program(arch);
+        for (arch, no_sockets) in [(&X86_64, false), (&AARCH64, false), (&X86_64, true), (&AARCH64, true)] {
+            let p = program(arch, no_sockets);
             assert_eq!(p.len() % 8, 0);
             let n = p.len() / 8;
             for (i, ins) in p.chunks(8).enumerate() {
@@ -333,6 +343,10 @@ mod tests {
             let k = |i: usize| u32::from_ne_bytes([p[i * 8 + 4], p[i * 8 + 5], p[i * 8 + 6], p[i * 8 + 7]]);
             assert_eq!(k(n - 2), RET_ERRNO | libc::EPERM as u32);
             assert_eq!(k(n - 1), RET_ERRNO | libc::ENOSYS as u32);
+            // socket(2) is compared (and so denied) only in the container tier's program.
+            let compares_socket =
+                (0..n).any(|i| u16::from_ne_bytes([p[i * 8], p[i * 8 + 1]]) == JEQ_K && k(i) == arch.socket);
+            assert_eq!(compares_socket, no_sockets);
         }
     }
 }
