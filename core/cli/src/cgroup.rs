@@ -197,8 +197,11 @@ impl Cgroup {
     /// SIGKILL to every process in the cgroup, until none is left (a fork
     /// racing the kill is caught by the next round; pids.max bounds them).
     pub fn kill_all(&self) {
-        let procs = self.dirs[0].join("cgroup.procs");
-        let kill = self.dirs[0].join("cgroup.kill");
+        // A cgroup whose first folder could not be made (a container's
+        // read-only /sys) holds nothing.
+        let Some(first) = self.dirs.first() else { return };
+        let procs = first.join("cgroup.procs");
+        let kill = first.join("cgroup.kill");
         if self.v2 && write(&kill, "1").is_ok() {
             return;
         }
@@ -272,4 +275,26 @@ fn stat_field(path: &Path, key: &str) -> Option<u64> {
 fn cstring(p: &Path) -> CString {
     use std::os::unix::ffi::OsStrExt;
     CString::new(p.as_os_str().as_bytes()).unwrap_or_default()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// make_v1 drops a half-made cgroup when its first folder cannot be
+    /// made (a container's read-only /sys): that once indexed dirs[0] and
+    /// panicked, ending the marking before any mark.
+    #[test]
+    fn a_cgroup_with_no_folder_is_dropped_quietly() {
+        let g = Cgroup {
+            v2: false,
+            dirs: Vec::new(),
+            memory: PathBuf::new(),
+            cpuacct: PathBuf::new(),
+            cpu: PathBuf::new(),
+            join: Vec::new(),
+        };
+        g.kill_all();
+        drop(g);
+    }
 }

@@ -101,6 +101,15 @@ fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
             crate::sandbox::MAX_JOBS
         )));
     }
+    // The container tier hides no shared folder (/tmp): two students marked at
+    // once could pass answers through one. One at a time, each one's litter
+    // removed before the next (container.rs).
+    let jobs = if runner.tier == crate::sandbox::Tier::Container && jobs > 1 {
+        eprintln!("siftlab: the container tier marks one student at a time (no private /tmp without namespaces)");
+        1
+    } else {
+        jobs
+    };
     eprintln!(
         "marking {} student(s) into {}: {n} calls per task, seed {}, {} job(s); SIFT of {} frame pair(s) in {:.1} s",
         students.len(),

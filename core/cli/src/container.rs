@@ -75,15 +75,23 @@ impl Enter {
     }
 }
 
-/// A private folder the harness of `uid` may write in (its HOME, TMPDIR and
-/// working folder): made with a random name, owned by that uid, 0700;
-/// removed with what is in it when dropped.
-pub struct Scratch(pub PathBuf);
+/// The harness's folders in the container tier, under a fresh random
+/// folder of root's in /tmp (every user may pass through /tmp; the caller's
+/// TMPDIR may be private): `harness/`, a copy of the harness's files the uid
+/// may read but not change, and `home/`, owned by the uid, 0700, its HOME,
+/// TMPDIR and working folder. Removed with what is in them when dropped.
+pub struct Scratch {
+    base: PathBuf,
+    harness: PathBuf,
+    home: PathBuf,
+}
 
 impl Scratch {
-    pub fn new(uid: u32) -> std::io::Result<Scratch> {
-        let template = std::env::temp_dir().join("siftlab-box-XXXXXX");
-        let template = CString::new(template.as_os_str().as_encoded_bytes())
+    pub fn new(uid: u32, harness_files: &Path) -> std::io::Result<Scratch> {
+        use std::os::unix::fs::PermissionsExt;
+        let tmp = Path::new("/tmp");
+        let parent = if tmp.is_dir() { tmp.to_path_buf() } else { std::env::temp_dir() };
+        let template = CString::new(parent.join("siftlab-box-XXXXXX").as_os_str().as_encoded_bytes())
             .map_err(|_| std::io::Error::from(std::io::ErrorKind::InvalidInput))?;
         let mut raw = template.into_bytes_with_nul();
         // SAFETY: raw is a NUL-terminated template mkdtemp fills in place.
@@ -91,20 +99,39 @@ impl Scratch {
             return Err(std::io::Error::last_os_error());
         }
         raw.pop();
-        let dir = PathBuf::from(String::from_utf8_lossy(&raw).into_owned());
-        std::os::unix::fs::chown(&dir, Some(uid), Some(uid))?;
-        Ok(Scratch(dir))
+        let base = PathBuf::from(String::from_utf8_lossy(&raw).into_owned());
+        let s = Scratch { harness: base.join("harness"), home: base.join("home"), base };
+        std::fs::set_permissions(&s.base, std::fs::Permissions::from_mode(0o755))?;
+        std::fs::create_dir(&s.harness)?;
+        std::fs::set_permissions(&s.harness, std::fs::Permissions::from_mode(0o755))?;
+        for e in std::fs::read_dir(harness_files)?.flatten() {
+            if e.file_type()?.is_file() {
+                let to = s.harness.join(e.file_name());
+                std::fs::copy(e.path(), &to)?;
+                std::fs::set_permissions(&to, std::fs::Permissions::from_mode(0o644))?;
+            }
+        }
+        std::fs::create_dir(&s.home)?;
+        std::fs::set_permissions(&s.home, std::fs::Permissions::from_mode(0o700))?;
+        std::os::unix::fs::chown(&s.home, Some(uid), Some(uid))?;
+        Ok(s)
     }
 
-    pub fn path(&self) -> &Path {
-        &self.0
+    /// The harness's files, read-only to the uid.
+    pub fn harness(&self) -> &Path {
+        &self.harness
+    }
+
+    /// The uid's one writable folder.
+    pub fn home(&self) -> &Path {
+        &self.home
     }
 }
 
 impl Drop for Scratch {
     fn drop(&mut self) {
         // std's remove_dir_all does not follow links the student left inside.
-        let _ = std::fs::remove_dir_all(&self.0);
+        let _ = std::fs::remove_dir_all(&self.base);
     }
 }
 
@@ -158,6 +185,36 @@ pub fn kill_uid(uid: u32) -> bool {
         }
     }
     processes_of(uid).is_empty()
+}
+
+/// Removes what `uid` left where every user may write (/tmp, /var/tmp,
+/// /dev/shm and the world-writable folders in them, to a bounded depth):
+/// with no mount namespace those are shared, so a file left there could
+/// reach the next student or the machine. Call it after `kill_uid`: the uid
+/// is this run's alone, so whatever it owns is its litter. Nothing is
+/// followed through a link; std's remove_dir_all does not follow them either.
+pub fn remove_litter(uid: u32) {
+    use std::os::unix::fs::MetadataExt;
+    let mut stack: Vec<(PathBuf, usize)> =
+        ["/tmp", "/var/tmp", "/dev/shm"].iter().map(|p| (PathBuf::from(p), 0)).collect();
+    let mut seen = 0usize;
+    while let Some((dir, depth)) = stack.pop() {
+        let Ok(rd) = std::fs::read_dir(&dir) else { continue };
+        for e in rd.flatten() {
+            seen += 1;
+            if seen > 200_000 {
+                return;
+            }
+            let path = e.path();
+            let Ok(m) = std::fs::symlink_metadata(&path) else { continue };
+            if m.uid() == uid {
+                let _ = if m.is_dir() { std::fs::remove_dir_all(&path) } else { std::fs::remove_file(&path) };
+            } else if m.is_dir() && m.mode() & 0o002 != 0 && depth < 8 {
+                // Another's folder the uid could write in: look inside.
+                stack.push((path, depth + 1));
+            }
+        }
+    }
 }
 
 /// Whether siftlab can use this tier here: it runs as root (to give the

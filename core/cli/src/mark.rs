@@ -198,7 +198,8 @@ fn pick_tier(python: &Python, dir: &std::path::Path) -> Result<Tier> {
         return match sandbox::check(python, dir, Tier::Container) {
             Ok(()) => Ok(Tier::Container),
             Err(e) => Err(Error::InvalidArgument(format!(
-                "no usable sandbox here: bubblewrap: {why}; the container tier: {e}"
+                "no usable sandbox here: bubblewrap: {why}; the container tier: {e}. Pass --no-sandbox only \
+                 to check your own file"
             ))),
         };
     }
@@ -275,14 +276,18 @@ impl Runner {
             )))
         });
         // The container tier's last word: no process of the marking uid may
-        // exist when the mark is written (one that does could write after it).
+        // exist when the mark is written (one that does could write after it),
+        // and nothing it left where every user may write outlives it.
         let uid = sandbox::marking_uid(job);
-        if self.tier == Tier::Container && !crate::container::kill_uid(uid) {
-            return Err(Error::InvalidArgument(format!(
-                "a process of the marking uid {uid} survived SIGKILL (pids {:?}): no mark is written; \
-                 run the marking again",
-                crate::container::processes_of(uid)
-            )));
+        if self.tier == Tier::Container {
+            if !crate::container::kill_uid(uid) {
+                return Err(Error::InvalidArgument(format!(
+                    "a process of the marking uid {uid} survived SIGKILL (pids {:?}): no mark is written; \
+                     run the marking again",
+                    crate::container::processes_of(uid)
+                )));
+            }
+            crate::container::remove_litter(uid);
         }
         marks
     }
@@ -410,13 +415,19 @@ impl Harness {
         // The container tier's private folder, owned by the marking uid.
         let scratch = match tier {
             Tier::Container => Some(
-                crate::container::Scratch::new(sandbox::marking_uid(job))
+                crate::container::Scratch::new(sandbox::marking_uid(job), dir)
                     .map_err(|e| Error::InvalidArgument(format!("cannot make the sandbox's folder: {e}")))?,
             ),
             _ => None,
         };
         let mut child = python
-            .command(dir, tier, job, cgroup.as_ref(), scratch.as_ref().map_or(dir, |s| s.path()))
+            .command(
+                scratch.as_ref().map_or(dir, |s| s.harness()),
+                tier,
+                job,
+                cgroup.as_ref(),
+                scratch.as_ref().map_or(dir, |s| s.home()),
+            )
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -600,6 +611,7 @@ impl Harness {
         let _ = self.child.wait();
         if let Some(uid) = self.uid {
             crate::container::kill_uid(uid);
+            crate::container::remove_litter(uid);
         }
     }
 

@@ -360,13 +360,14 @@ impl Python {
 /// the sandbox); `Err` says why not.
 pub fn check(python: &Python, harness_dir: &Path, tier: Tier) -> std::result::Result<(), String> {
     let scratch = match tier {
-        Tier::Container => {
-            Some(crate::container::Scratch::new(marking_uid(0)).map_err(|e| format!("cannot make its folder: {e}"))?)
-        }
+        Tier::Container => Some(
+            crate::container::Scratch::new(marking_uid(0), harness_dir)
+                .map_err(|e| format!("cannot make its folder: {e}"))?,
+        ),
         _ => None,
     };
-    let dir = scratch.as_ref().map_or(harness_dir, |s| s.path());
-    let mut c = python.build(harness_dir, tier, 0, None, dir, true);
+    let (harness, home) = scratch.as_ref().map_or((harness_dir, harness_dir), |s| (s.harness(), s.home()));
+    let mut c = python.build(harness, tier, 0, None, home, true);
     match c.stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()).output() {
         Ok(o) if o.status.success() => Ok(()),
         Ok(o) => Err(siftlab_mark::escaped(String::from_utf8_lossy(&o.stderr).trim(), 300)),

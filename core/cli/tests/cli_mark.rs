@@ -445,13 +445,30 @@ fn the_sandbox_is_required_unless_waived() {
     let python = String::from_utf8_lossy(&probe.stdout).trim().to_string();
     let empty = std::env::temp_dir().join(format!("siftlab-no-bwrap-{}", std::process::id()));
     fs::create_dir_all(&empty).unwrap();
-    let (o, _) =
-        mark_with(&fixture("good"), &["-n", "1"], &[("PATH", empty.to_str().unwrap()), ("SIFTLAB_PYTHON", &python)]);
+    // SIFTLAB_SANDBOX=bubblewrap: nothing weaker is taken.
+    let path = ("PATH", empty.to_str().unwrap());
+    let (o, _) = mark_with(
+        &fixture("good"),
+        &["-n", "1"],
+        &[path, ("SIFTLAB_PYTHON", &python), ("SIFTLAB_SANDBOX", "bubblewrap")],
+    );
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     for w in ["no usable sandbox", "bubblewrap", "--no-sandbox"] {
         assert!(stderr(&o).contains(w), "lacks {w:?}: {}", stderr(&o));
     }
     assert!(stdout(&o).is_empty(), "{}", stdout(&o));
+    // Otherwise, as root (a platform's container), the container tier runs
+    // the file with an interpreter every user may run; not as root, refused.
+    let (o, _) = mark_with(&fixture("good"), &["-n", "1"], &[path, ("SIFTLAB_PYTHON", "/usr/bin/python3")]);
+    // SAFETY: geteuid has no preconditions.
+    if unsafe { libc::geteuid() } == 0 {
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        assert!(stderr(&o).contains("sandboxed (container tier"), "{}", stderr(&o));
+    } else {
+        assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
+        assert!(stderr(&o).contains("--no-sandbox"), "{}", stderr(&o));
+    }
+    let _ = fs::remove_dir_all(&empty);
 }
 
 /// A file whose matching_info returns objects that always say "equal"

@@ -1,0 +1,280 @@
+#!/usr/bin/env python3
+"""Gradescope's contract simulated on this machine, with the autograder `siftlab autograder
+gradescope` writes (docs/marking.md, "Gradescope"), and the attacks a submission can make
+from inside it (tests/fixtures/mark/platform/README.md).
+
+Per case, a fresh folder laid out as Gradescope lays out its container:
+
+    /autograder/source/       the bundle's files (run_autograder, setup.sh, siftlab, MyKITTI/)
+    /autograder/submission/   the student's vision_tasks.py
+    /autograder/results/      empty; results.json is what Gradescope reads
+
+and `run_autograder` runs as root in bubblewrap standing for the container: the host's
+files read-only, that folder bound at /autograder, a private /tmp and /dev, no network, its
+own PID namespace, **bwrap masked** (a file of nothing at its path: Docker's default profile
+forbids the namespaces it needs), so siftlab runs its container tier; in a cgroup holding it
+to Gradescope's defaults, 768 MB and half a CPU (cgroup v1 memory and cpu, or v2's memory.max
+and cpu.max, made under the hierarchy this process is in; root needed). After run_autograder
+ends, the container lives on 2 s before its results are read (a daemon would write then).
+
+Checks, per case: results.json is siftlab's (valid JSON; score, max_score 20, output,
+output_format, execution_time, extra_data.sandbox "container", four tests with name, score,
+max_score 5, status, output, output_format, visibility), its score and each test's score are
+the reference's (the same file marked by the host's `siftlab mark --json` in bubblewrap, where
+none of the attacks can happen; 20/20 for the good solution), the bundle's files unchanged,
+nothing new in /autograder/source or /autograder/results but results.json. Each attack also
+runs once as a control with `--no-sandbox` in run_autograder, where it must show (a forged or
+missing results.json, a changed bundle): so the check is seen to catch it. Prints each run's
+peak memory (the cgroup's) and seconds.
+
+    python3 tests/security/platform_check.py [--siftlab PATH] [-n N] [--seed S] [-j JOBS]
+        [--python PATH] [--keep] [CASE...]
+
+SIFTLAB in the environment is the default --siftlab; SIFTLAB_PYTHON (default /usr/bin/python3)
+is the container's interpreter, run by the student's uid, so not one under /root. Needs Linux,
+root, bubblewrap; Python 3.8+, standard library only.
+"""
+
+import argparse
+import concurrent.futures
+import hashlib
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+FIXTURES = os.path.join(REPO, "tests", "fixtures", "mark")
+DATASET = os.path.join(REPO, "www", "demo", "MyKITTI")
+CASES = ["good", "inverted", "platform/kill_marker", "platform/daemon_results",
+         "platform/overwrite_bundle", "platform/write_results"]
+MEMORY = 768 << 20
+TASKS = ["dt", "nn", "nndr", "matching_info"]
+
+
+def digest_tree(root):
+    out = {}
+    for d, _, files in os.walk(root):
+        for f in files:
+            p = os.path.join(d, f)
+            if os.path.islink(p):
+                out[os.path.relpath(p, root)] = "link:" + os.readlink(p)
+            else:
+                with open(p, "rb") as fh:
+                    out[os.path.relpath(p, root)] = hashlib.sha256(fh.read()).hexdigest()
+    return out
+
+
+class Cgroup:
+    """768 MB and half a CPU for one case, where this process may make a cgroup."""
+
+    def __init__(self, name):
+        self.dirs, self.memory_dir = [], None
+        own = open("/proc/self/cgroup").read().splitlines()
+        v2 = os.path.exists("/sys/fs/cgroup/cgroup.controllers")
+        if v2:
+            rel = [l.split(":", 2)[2] for l in own if l.startswith("0::")][0].lstrip("/")
+            d = os.path.join("/sys/fs/cgroup", rel, name)
+            os.mkdir(d)
+            self.dirs.append(d)
+            self._set(d, "memory.max", str(MEMORY))
+            self._set(d, "memory.swap.max", "0", optional=True)
+            self._set(d, "cpu.max", "50000 100000")
+            self.memory_dir, self.peak = d, "memory.peak"
+        else:
+            for ctrl in ("memory", "cpu"):
+                rel = [l.split(":", 2)[2] for l in own if ctrl in l.split(":")[1].split(",")][0].lstrip("/")
+                d = os.path.join("/sys/fs/cgroup", ctrl, rel, name)
+                os.mkdir(d)
+                self.dirs.append(d)
+                if ctrl == "memory":
+                    self._set(d, "memory.limit_in_bytes", str(MEMORY))
+                    self._set(d, "memory.memsw.limit_in_bytes", str(MEMORY), optional=True)
+                    self.memory_dir, self.peak = d, "memory.max_usage_in_bytes"
+                else:
+                    self._set(d, "cpu.cfs_period_us", "100000")
+                    self._set(d, "cpu.cfs_quota_us", "50000")
+
+    @staticmethod
+    def _set(d, f, v, optional=False):
+        try:
+            with open(os.path.join(d, f), "w") as fh:
+                fh.write(v)
+        except OSError:
+            if not optional:
+                raise
+
+    def join(self):
+        # In the child before exec: everything the container starts is inside.
+        for d in self.dirs:
+            with open(os.path.join(d, "cgroup.procs"), "w") as fh:
+                fh.write("0")
+
+    def peak_bytes(self):
+        try:
+            return int(open(os.path.join(self.memory_dir, self.peak)).read())
+        except (OSError, ValueError):
+            return -1
+
+    def remove(self):
+        for d in self.dirs:
+            for _ in range(50):
+                try:
+                    os.rmdir(d)
+                    break
+                except OSError:
+                    time.sleep(0.1)
+
+
+def reference(siftlab, variant, n, seed):
+    """The file's marks in bubblewrap on the host: {task: marks} and the total."""
+    r = subprocess.run([siftlab, "-d", DATASET, "mark", os.path.join(FIXTURES, variant, "vision_tasks.py"),
+                        "-n", str(n), "--seed", str(seed), "--json"], capture_output=True, text=True, timeout=900)
+    j = json.loads(r.stdout)
+    return {t["task"]: round(t["marks"], 2) for t in j["tasks"]}, round(j["total"], 2)
+
+
+def run_case(variant, bundle, siftlab, n, seed, python, keep, control=False):
+    reasons = []
+    base = tempfile.mkdtemp(prefix="siftlab-platform-")
+    ag = os.path.join(base, "autograder")
+    shutil.copytree(bundle, os.path.join(ag, "source"), symlinks=True)
+    os.remove(os.path.join(ag, "source", "autograder.zip"))
+    if control:
+        # The control: the same run without the sandbox, where the attack must show.
+        script = os.path.join(ag, "source", "run_autograder")
+        text = open(script).read().replace(' mark /autograder/submission ', ' mark --no-sandbox /autograder/submission ')
+        open(script, "w").write(text)
+    os.makedirs(os.path.join(ag, "submission"))
+    os.makedirs(os.path.join(ag, "results"))
+    shutil.copy(os.path.join(FIXTURES, variant, "vision_tasks.py"), os.path.join(ag, "submission"))
+    # Gradescope's folders: root's, readable by all.
+    for d in (base, ag):
+        os.chmod(d, 0o755)
+    before = digest_tree(os.path.join(ag, "source"))
+    bwrap = shutil.which("bwrap")
+    # The host's top-level folders read-only (links as links) on bubblewrap's own root, so
+    # /autograder can be made there.
+    cmd = ["bwrap"]
+    for name in sorted(os.listdir("/")):
+        path = "/" + name
+        if name in ("proc", "dev", "tmp", "autograder", "grade", "run"):
+            continue
+        if os.path.islink(path):
+            cmd += ["--symlink", os.readlink(path), path]
+        elif os.path.isdir(path):
+            cmd += ["--ro-bind", path, path]
+    cmd += ["--bind", ag, "/autograder", "--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp", "--tmpfs", "/run",
+            "--tmpfs", "/var/tmp", "--ro-bind", "/dev/null", bwrap,
+           "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts", "--die-with-parent",
+           "--setenv", "SIFTLAB_PYTHON", python, "--",
+           "/bin/sh", "-c", "/autograder/source/run_autograder; echo \"run_autograder: $?\" >&2; sleep 2"]
+    group = Cgroup("siftlab-platform-%d-%s" % (os.getpid(), variant.replace("/", "-")))
+    t0 = time.time()
+    try:
+        r = subprocess.run(cmd, capture_output=True, text=True, timeout=1200, preexec_fn=group.join)
+    finally:
+        seconds = time.time() - t0
+        peak = group.peak_bytes()
+        group.remove()
+    after = digest_tree(os.path.join(ag, "source"))
+    if after != before:
+        changed = sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))
+        reasons.append("the bundle changed: %s" % changed[:5])
+    extra = sorted(set(os.listdir(os.path.join(ag, "results"))) - {"results.json"})
+    if extra:
+        reasons.append("new files in results/: %s" % extra)
+    res_path = os.path.join(ag, "results", "results.json")
+    got = None
+    if os.path.islink(res_path) or not os.path.isfile(res_path):
+        reasons.append("no results.json written by siftlab (a link or missing); stderr: %s" % r.stderr[-600:])
+    else:
+        try:
+            got = json.load(open(res_path))
+        except ValueError as e:
+            reasons.append("results.json is not JSON: %s" % e)
+    if got is not None:
+        reasons += check_fields(got)
+        want_tasks, want_total = reference(siftlab, variant, n, seed)
+        if variant == "good" and want_total != 20.0:
+            reasons.append("the good solution's reference is %s, not 20" % want_total)
+        if got.get("score") != want_total:
+            reasons.append("score %s, the reference %s" % (got.get("score"), want_total))
+        tasks = {t.get("name"): t.get("score") for t in got.get("tests", [])}
+        if tasks != want_tasks:
+            reasons.append("tests %s, the reference %s" % (tasks, want_tasks))
+        if "FORGED" in json.dumps(got):
+            reasons.append("forged text in results.json")
+    if not keep:
+        shutil.rmtree(base, ignore_errors=True)
+    if control:
+        return {"case": variant + " (control, no sandbox)", "ok": bool(reasons),
+                "reasons": ["the attack did not show without the sandbox: the check cannot see it"],
+                "seconds": seconds, "peak": peak, "score": got and got.get("score")}
+    return {"case": variant, "ok": not reasons, "reasons": reasons, "seconds": seconds, "peak": peak,
+            "score": got and got.get("score")}
+
+
+def check_fields(j):
+    bad = []
+    def want(obj, key, kind, where):
+        if not isinstance(obj.get(key), kind):
+            bad.append("%s: %s is %r" % (where, key, obj.get(key)))
+    for key, kind in (("score", float), ("max_score", float), ("output", str), ("output_format", str),
+                      ("execution_time", float), ("tests", list), ("extra_data", dict)):
+        want(j, key, kind, "results.json")
+    if j.get("max_score") != 20.0:
+        bad.append("max_score %r" % j.get("max_score"))
+    if (j.get("extra_data") or {}).get("sandbox") != "container":
+        bad.append("sandbox %r, not the container tier" % (j.get("extra_data") or {}).get("sandbox"))
+    tests = j.get("tests") or []
+    if [t.get("name") for t in tests] != TASKS:
+        bad.append("tests named %s" % [t.get("name") for t in tests])
+    for t in tests:
+        for key, kind in (("score", float), ("max_score", float), ("status", str), ("output", str),
+                          ("output_format", str), ("visibility", str)):
+            want(t, key, kind, "test %s" % t.get("name"))
+        if t.get("status") != ("passed" if t.get("score") == 5.0 else "failed"):
+            bad.append("test %s: status %r for score %r" % (t.get("name"), t.get("status"), t.get("score")))
+    return bad
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("cases", nargs="*", default=CASES)
+    ap.add_argument("--siftlab", default=os.environ.get("SIFTLAB") or os.path.join(REPO, "target", "release", "siftlab"))
+    ap.add_argument("-n", type=int, default=1)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("-j", "--jobs", type=int, default=2)
+    ap.add_argument("--python", default=os.environ.get("SIFTLAB_PYTHON", "/usr/bin/python3"))
+    ap.add_argument("--keep", action="store_true")
+    a = ap.parse_args()
+    siftlab = os.path.abspath(a.siftlab)
+    if os.geteuid() != 0:
+        print("platform_check: needs root (the platforms run the autograder as root)", file=sys.stderr)
+        return 2
+    bundle = tempfile.mkdtemp(prefix="siftlab-platform-bundle-")
+    shutil.rmtree(bundle)
+    subprocess.run([siftlab, "-d", DATASET, "autograder", "gradescope", "--out", bundle, "--seed", str(a.seed),
+                    "-n", str(a.n)], check=True, stderr=subprocess.DEVNULL)
+    try:
+        with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
+            runs = [(c, False) for c in a.cases] + [(c, True) for c in a.cases if c.startswith("platform/")]
+            results = list(pool.map(lambda r: run_case(r[0], bundle, siftlab, a.n, a.seed, a.python, a.keep, r[1]),
+                                    runs))
+    finally:
+        shutil.rmtree(bundle, ignore_errors=True)
+    for r in results:
+        print("%s %-28s score %-6s %5.1f s, peak %4d MB%s" % (
+            "PASS" if r["ok"] else "FAIL", r["case"], r["score"], r["seconds"], r["peak"] >> 20,
+            "" if r["ok"] else ": " + "; ".join(r["reasons"])))
+    failed = sum(not r["ok"] for r in results)
+    print("%d fixture(s): %d passed, %d failed" % (len(results), len(results) - failed, failed))
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
