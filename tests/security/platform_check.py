@@ -1,15 +1,18 @@
 #!/usr/bin/env python3
-"""Gradescope's contract simulated on this machine, with the autograder `siftlab autograder
-gradescope` writes (docs/marking.md, "Gradescope"), and the attacks a submission can make
-from inside it (tests/fixtures/mark/platform/README.md).
+"""Gradescope's and PrairieLearn's contracts simulated on this machine, with the autograders
+`siftlab autograder {gradescope,prairielearn}` writes (docs/marking.md, "Gradescope",
+"PrairieLearn"), and the attacks a submission can make from inside them
+(tests/fixtures/mark/platform/README.md).
 
-Per case, a fresh folder laid out as Gradescope lays out its container:
+Per case and platform, a fresh folder laid out as the platform lays out its container:
 
-    /autograder/source/       the bundle's files (run_autograder, setup.sh, siftlab, MyKITTI/)
-    /autograder/submission/   the student's vision_tasks.py
-    /autograder/results/      empty; results.json is what Gradescope reads
+    Gradescope                                      PrairieLearn
+    /autograder/source/   the bundle's files        /siftlab/          the grader image's files
+    /autograder/submission/vision_tasks.py          /grade/student/vision_tasks.py
+    /autograder/results/  (results.json)            /grade/results/    (results.json)
 
-and `run_autograder` runs as root in bubblewrap standing for the container: the host's
+and the entrypoint (run_autograder, run_grader) runs as root in bubblewrap standing for the
+container: the host's
 files read-only, that folder bound at /autograder, a private /tmp and /dev, no network, its
 own PID namespace, **bwrap masked** (a file of nothing at its path: Docker's default profile
 forbids the namespaces it needs), so siftlab runs its container tier; in a cgroup holding it
@@ -17,10 +20,12 @@ to Gradescope's defaults, 768 MB and half a CPU (cgroup v1 memory and cpu, or v2
 and cpu.max, made under the hierarchy this process is in; root needed). After run_autograder
 ends, the container lives on 2 s before its results are read (a daemon would write then).
 
-Checks, per case: results.json is siftlab's (valid JSON; score, max_score 20, output,
-output_format, execution_time, extra_data.sandbox "container", four tests with name, score,
-max_score 5, status, output, output_format, visibility), its score and each test's score are
-the reference's (the same file marked by the host's `siftlab mark --json` in bubblewrap, where
+Checks, per case: results.json is siftlab's, in the platform's format field by field
+(Gradescope: score, max_score 20, output, output_format, execution_time, extra_data.sandbox
+"container", four tests with name, score, max_score 5, status, output, output_format,
+visibility; PrairieLearn: gradable, score in [0, 1], message, output, sandbox "container",
+four tests with name, points, max_points 5, message, output; a file that does not compile is
+not gradable and has format_errors), its score and each test's are the reference's (the same file marked by the host's `siftlab mark --json` in bubblewrap, where
 none of the attacks can happen; 20/20 for the good solution), the bundle's files unchanged,
 nothing new in /autograder/source or /autograder/results but results.json. Each attack also
 runs once as a control with `--no-sandbox` in run_autograder, where it must show (a forged or
@@ -28,7 +33,7 @@ missing results.json, a changed bundle): so the check is seen to catch it. Print
 peak memory (the cgroup's) and seconds.
 
     python3 tests/security/platform_check.py [--siftlab PATH] [-n N] [--seed S] [-j JOBS]
-        [--python PATH] [--keep] [CASE...]
+        [--platform gradescope|prairielearn]... [--python PATH] [--keep] [CASE...]
 
 SIFTLAB in the environment is the default --siftlab; SIFTLAB_PYTHON (default /usr/bin/python3)
 is the container's interpreter, run by the student's uid, so not one under /root. Needs Linux,
@@ -49,8 +54,16 @@ import time
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 FIXTURES = os.path.join(REPO, "tests", "fixtures", "mark")
 DATASET = os.path.join(REPO, "www", "demo", "MyKITTI")
-CASES = ["good", "inverted", "platform/kill_marker", "platform/daemon_results",
+CASES = ["good", "inverted", "syntax", "platform/kill_marker", "platform/daemon_results",
          "platform/overwrite_bundle", "platform/write_results"]
+# Where each platform puts the bundle, the submission and the results, and its entrypoint.
+LAYOUT = {
+    "gradescope": {"bundle": "autograder/source", "student": "autograder/submission",
+                   "results": "autograder/results", "mounts": ["autograder"],
+                   "entry": "/autograder/source/run_autograder"},
+    "prairielearn": {"bundle": "siftlab", "student": "grade/student", "results": "grade/results",
+                     "mounts": ["siftlab", "grade"], "entry": "/siftlab/run_grader"},
+}
 MEMORY = 768 << 20
 TASKS = ["dt", "nn", "nndr", "matching_info"]
 
@@ -137,42 +150,48 @@ def reference(siftlab, variant, n, seed):
     return {t["task"]: round(t["marks"], 2) for t in j["tasks"]}, round(j["total"], 2)
 
 
-def run_case(variant, bundle, siftlab, n, seed, python, keep, control=False):
+def run_case(platform, variant, bundle, siftlab, n, seed, python, keep, control=False):
     reasons = []
+    lay = LAYOUT[platform]
     base = tempfile.mkdtemp(prefix="siftlab-platform-")
-    ag = os.path.join(base, "autograder")
-    shutil.copytree(bundle, os.path.join(ag, "source"), symlinks=True)
-    os.remove(os.path.join(ag, "source", "autograder.zip"))
+    os.chmod(base, 0o755)
+    src = os.path.join(base, lay["bundle"])
+    shutil.copytree(bundle[platform], src, symlinks=True)
+    if os.path.exists(os.path.join(src, "autograder.zip")):
+        os.remove(os.path.join(src, "autograder.zip"))
+    entry = os.path.join(base, lay["entry"].lstrip("/"))
     if control:
         # The control: the same run without the sandbox, where the attack must show.
-        script = os.path.join(ag, "source", "run_autograder")
-        text = open(script).read().replace(' mark /autograder/submission ', ' mark --no-sandbox /autograder/submission ')
-        open(script, "w").write(text)
-    os.makedirs(os.path.join(ag, "submission"))
-    os.makedirs(os.path.join(ag, "results"))
-    shutil.copy(os.path.join(FIXTURES, variant, "vision_tasks.py"), os.path.join(ag, "submission"))
-    # Gradescope's folders: root's, readable by all.
-    for d in (base, ag):
+        text = open(entry).read().replace(" mark /", " mark --no-sandbox /")
+        open(entry, "w").write(text)
+    for d in (lay["student"], lay["results"]):
+        os.makedirs(os.path.join(base, d))
+    shutil.copy(os.path.join(FIXTURES, variant, "vision_tasks.py"), os.path.join(base, lay["student"]))
+    # The platforms' folders: root's, readable by all.
+    for d, _, _ in os.walk(base):
         os.chmod(d, 0o755)
-    before = digest_tree(os.path.join(ag, "source"))
+    before = digest_tree(src)
     bwrap = shutil.which("bwrap")
     # The host's top-level folders read-only (links as links) on bubblewrap's own root, so
-    # /autograder can be made there.
+    # the platform's folders can be made there.
     cmd = ["bwrap"]
     for name in sorted(os.listdir("/")):
         path = "/" + name
-        if name in ("proc", "dev", "tmp", "autograder", "grade", "run"):
+        if name in ("proc", "dev", "tmp", "run") or name in lay["mounts"]:
             continue
         if os.path.islink(path):
             cmd += ["--symlink", os.readlink(path), path]
         elif os.path.isdir(path):
             cmd += ["--ro-bind", path, path]
-    cmd += ["--bind", ag, "/autograder", "--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp", "--tmpfs", "/run",
+    for m in lay["mounts"]:
+        cmd += ["--bind", os.path.join(base, m), "/" + m]
+    cmd += ["--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp", "--tmpfs", "/run",
             "--tmpfs", "/var/tmp", "--ro-bind", "/dev/null", bwrap,
-           "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts", "--die-with-parent",
-           "--setenv", "SIFTLAB_PYTHON", python, "--",
-           "/bin/sh", "-c", "/autograder/source/run_autograder; echo \"run_autograder: $?\" >&2; sleep 2"]
-    group = Cgroup("siftlab-platform-%d-%s" % (os.getpid(), variant.replace("/", "-")))
+            "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts", "--die-with-parent",
+            "--setenv", "SIFTLAB_PYTHON", python, "--",
+            "/bin/sh", "-c", lay["entry"] + "; echo \"entrypoint: $?\" >&2; sleep 2"]
+    group = Cgroup("siftlab-platform-%d-%s-%s%s" % (os.getpid(), platform, variant.replace("/", "-"),
+                                                   "-control" if control else ""))
     t0 = time.time()
     try:
         r = subprocess.run(cmd, capture_output=True, text=True, timeout=1200, preexec_fn=group.join)
@@ -180,14 +199,14 @@ def run_case(variant, bundle, siftlab, n, seed, python, keep, control=False):
         seconds = time.time() - t0
         peak = group.peak_bytes()
         group.remove()
-    after = digest_tree(os.path.join(ag, "source"))
+    after = digest_tree(src)
     if after != before:
         changed = sorted(k for k in set(before) | set(after) if before.get(k) != after.get(k))
         reasons.append("the bundle changed: %s" % changed[:5])
-    extra = sorted(set(os.listdir(os.path.join(ag, "results"))) - {"results.json"})
+    extra = sorted(set(os.listdir(os.path.join(base, lay["results"]))) - {"results.json"})
     if extra:
         reasons.append("new files in results/: %s" % extra)
-    res_path = os.path.join(ag, "results", "results.json")
+    res_path = os.path.join(base, lay["results"], "results.json")
     got = None
     if os.path.islink(res_path) or not os.path.isfile(res_path):
         reasons.append("no results.json written by siftlab (a link or missing); stderr: %s" % r.stderr[-600:])
@@ -197,28 +216,63 @@ def run_case(variant, bundle, siftlab, n, seed, python, keep, control=False):
         except ValueError as e:
             reasons.append("results.json is not JSON: %s" % e)
     if got is not None:
-        reasons += check_fields(got)
         want_tasks, want_total = reference(siftlab, variant, n, seed)
+        # A refused file's report lists no task: each is 0.
+        want_tasks = want_tasks or {t: 0.0 for t in TASKS}
         if variant == "good" and want_total != 20.0:
             reasons.append("the good solution's reference is %s, not 20" % want_total)
-        if got.get("score") != want_total:
-            reasons.append("score %s, the reference %s" % (got.get("score"), want_total))
-        tasks = {t.get("name"): t.get("score") for t in got.get("tests", [])}
+        if platform == "gradescope":
+            reasons += gradescope_fields(got, "container")
+            total = got.get("score")
+            tasks = {t.get("name"): t.get("score") for t in got.get("tests", [])}
+        else:
+            reasons += prairielearn_fields(got, variant == "syntax")
+            total = round(got.get("score", -1) * 20, 2) if isinstance(got.get("score"), float) else None
+            tasks = {t.get("name"): t.get("points") for t in got.get("tests", [])}
+        if total != want_total:
+            reasons.append("score %s of 20, the reference %s" % (total, want_total))
         if tasks != want_tasks:
             reasons.append("tests %s, the reference %s" % (tasks, want_tasks))
         if "FORGED" in json.dumps(got):
             reasons.append("forged text in results.json")
     if not keep:
         shutil.rmtree(base, ignore_errors=True)
+    name = "%s %s" % (platform, variant)
     if control:
-        return {"case": variant + " (control, no sandbox)", "ok": bool(reasons),
+        return {"case": name + " (control, no sandbox)", "ok": bool(reasons),
                 "reasons": ["the attack did not show without the sandbox: the check cannot see it"],
                 "seconds": seconds, "peak": peak, "score": got and got.get("score")}
-    return {"case": variant, "ok": not reasons, "reasons": reasons, "seconds": seconds, "peak": peak,
+    return {"case": name, "ok": not reasons, "reasons": reasons, "seconds": seconds, "peak": peak,
             "score": got and got.get("score")}
 
 
-def check_fields(j):
+def prairielearn_fields(j, not_gradable):
+    bad = []
+    if j.get("gradable") is not (not not_gradable):
+        bad.append("gradable %r" % j.get("gradable"))
+    if not_gradable and not (isinstance(j.get("format_errors"), list) and j["format_errors"]):
+        bad.append("no format_errors for a file that does not compile")
+    score = j.get("score")
+    if not isinstance(score, float) or not 0.0 <= score <= 1.0:
+        bad.append("score %r not in [0, 1]" % score)
+    for key in ("message", "output"):
+        if not isinstance(j.get(key), str):
+            bad.append("%s is %r" % (key, j.get(key)))
+    if j.get("sandbox") != "container":
+        bad.append("sandbox %r" % j.get("sandbox"))
+    tests = j.get("tests") or []
+    if [t.get("name") for t in tests] != TASKS:
+        bad.append("tests named %s" % [t.get("name") for t in tests])
+    for t in tests:
+        for key, kind in (("points", float), ("max_points", float), ("message", str), ("output", str)):
+            if not isinstance(t.get(key), kind):
+                bad.append("test %s: %s is %r" % (t.get("name"), key, t.get(key)))
+        if t.get("max_points") != 5.0:
+            bad.append("test %s: max_points %r" % (t.get("name"), t.get("max_points")))
+    return bad
+
+
+def gradescope_fields(j, sandbox):
     bad = []
     def want(obj, key, kind, where):
         if not isinstance(obj.get(key), kind):
@@ -228,8 +282,8 @@ def check_fields(j):
         want(j, key, kind, "results.json")
     if j.get("max_score") != 20.0:
         bad.append("max_score %r" % j.get("max_score"))
-    if (j.get("extra_data") or {}).get("sandbox") != "container":
-        bad.append("sandbox %r, not the container tier" % (j.get("extra_data") or {}).get("sandbox"))
+    if (j.get("extra_data") or {}).get("sandbox") != sandbox:
+        bad.append("sandbox %r, not %r" % ((j.get("extra_data") or {}).get("sandbox"), sandbox))
     tests = j.get("tests") or []
     if [t.get("name") for t in tests] != TASKS:
         bad.append("tests named %s" % [t.get("name") for t in tests])
@@ -245,6 +299,8 @@ def check_fields(j):
 def main():
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("cases", nargs="*", default=CASES)
+    ap.add_argument("--platform", dest="platforms", action="append", choices=sorted(LAYOUT),
+                    help="the platforms to simulate (default: both)")
     ap.add_argument("--siftlab", default=os.environ.get("SIFTLAB") or os.path.join(REPO, "target", "release", "siftlab"))
     ap.add_argument("-n", type=int, default=1)
     ap.add_argument("--seed", type=int, default=1)
@@ -253,22 +309,29 @@ def main():
     ap.add_argument("--keep", action="store_true")
     a = ap.parse_args()
     siftlab = os.path.abspath(a.siftlab)
+    a.platforms = a.platforms or sorted(LAYOUT)
     if os.geteuid() != 0:
         print("platform_check: needs root (the platforms run the autograder as root)", file=sys.stderr)
         return 2
-    bundle = tempfile.mkdtemp(prefix="siftlab-platform-bundle-")
-    shutil.rmtree(bundle)
-    subprocess.run([siftlab, "-d", DATASET, "autograder", "gradescope", "--out", bundle, "--seed", str(a.seed),
-                    "-n", str(a.n)], check=True, stderr=subprocess.DEVNULL)
+    bundle = {}
+    for platform in LAYOUT:
+        bundle[platform] = tempfile.mkdtemp(prefix="siftlab-platform-bundle-")
+        shutil.rmtree(bundle[platform])
+        subprocess.run([siftlab, "-d", DATASET, "autograder", platform, "--out", bundle[platform],
+                        "--seed", str(a.seed), "-n", str(a.n)], check=True, stdout=subprocess.DEVNULL,
+                       stderr=subprocess.DEVNULL)
+    runs = [(p, c, False) for p in a.platforms for c in a.cases]
+    # The attacks' controls, once each, on Gradescope.
+    runs += [("gradescope", c, True) for c in a.cases if c.startswith("platform/")]
     try:
         with concurrent.futures.ThreadPoolExecutor(a.jobs) as pool:
-            runs = [(c, False) for c in a.cases] + [(c, True) for c in a.cases if c.startswith("platform/")]
-            results = list(pool.map(lambda r: run_case(r[0], bundle, siftlab, a.n, a.seed, a.python, a.keep, r[1]),
-                                    runs))
+            results = list(pool.map(
+                lambda r: run_case(r[0], r[1], bundle, siftlab, a.n, a.seed, a.python, a.keep, r[2]), runs))
     finally:
-        shutil.rmtree(bundle, ignore_errors=True)
+        for b in bundle.values():
+            shutil.rmtree(b, ignore_errors=True)
     for r in results:
-        print("%s %-28s score %-6s %5.1f s, peak %4d MB%s" % (
+        print("%s %-45s score %-6s %5.1f s, peak %4d MB%s" % (
             "PASS" if r["ok"] else "FAIL", r["case"], r["score"], r["seconds"], r["peak"] >> 20,
             "" if r["ok"] else ": " + "; ".join(r["reasons"])))
     failed = sum(not r["ok"] for r in results)

@@ -45,14 +45,15 @@ pub enum Command {
     MatchAll(MatchAllArgs),
     /// Mark a student's vision_tasks.py as the lab's automarker does (python3 in a bubblewrap sandbox).
     Mark(MarkArgs),
-    /// Write an autograder for a course platform (gradescope): the files and a zip to upload.
+    /// Write an autograder for a course platform: gradescope (the files and a zip to upload)
+    /// or prairielearn (a grader image's Dockerfile, its entrypoint, the question's options).
     Autograder(AutograderArgs),
 }
 
 #[derive(Args, Debug)]
 pub struct AutograderArgs {
     /// The platform the autograder is for.
-    #[arg(value_parser = ["gradescope"])]
+    #[arg(value_parser = ["gradescope", "prairielearn"])]
     pub platform: String,
     /// A new (or empty) folder for the autograder's files and autograder.zip.
     #[arg(long, value_name = "DIR")]
@@ -95,6 +96,10 @@ pub struct MarkArgs {
     /// Write Gradescope's results.json for one submission (a file, or a folder holding vision_tasks.py).
     #[arg(long, value_name = "RESULTS_JSON")]
     pub gradescope: Option<PathBuf>,
+    /// Write PrairieLearn's external-grader results.json for one submission (a file, or a
+    /// folder holding vision_tasks.py, e.g. /grade/student).
+    #[arg(long, value_name = "RESULTS_JSON")]
+    pub prairielearn: Option<PathBuf>,
     /// Calls per task (the lab's marking: 25).
     #[arg(short = 'n', long = "cases", default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub n: u32,

@@ -1,10 +1,14 @@
-//! `siftlab autograder gradescope --out DIR [--seed S] [-n N] [--binary PATH]`:
-//! writes Gradescope's autograder for the lab (docs/marking.md, "Gradescope"):
-//! `setup.sh` (python3 and numpy from the image's packages), `run_autograder`
-//! (marks /autograder/submission in the container sandbox tier and writes
-//! /autograder/results/results.json), the siftlab binary, the frames the
-//! marker draws its cases from (with their licence), and the same files as
-//! `autograder.zip`, ready to upload.
+//! `siftlab autograder {gradescope,prairielearn} --out DIR [--seed S] [-n N]
+//! [--binary PATH]`: writes a course platform's autograder for the lab
+//! (docs/marking.md, "Gradescope", "PrairieLearn"). Both hold the siftlab
+//! binary and the frames the marker draws its cases from (with their
+//! licence). Gradescope: `setup.sh` (python3 and numpy from the image's
+//! packages), `run_autograder` (marks /autograder/submission in the container
+//! sandbox tier, writes /autograder/results/results.json) and all of it as
+//! `autograder.zip`, ready to upload. PrairieLearn: the grader image's
+//! `Dockerfile`, its entrypoint `run_grader` (marks /grade/student, writes
+//! /grade/results/results.json), and the question's `info.json` options and
+//! `question.html`.
 
 use crate::args::{AutograderArgs, Cli};
 use siftlab_core::error::{Error, Result};
@@ -40,6 +44,70 @@ exec "$SRC/siftlab" -d "$SRC/MyKITTI" -s {sequence} mark /autograder/submission 
     )
 }
 
+/// PrairieLearn's grader image: Ubuntu 22.04 (the same C library as
+/// Gradescope's), python3 and numpy from its packages, siftlab and the frames.
+const DOCKERFILE: &str = r#"# siftlab's PrairieLearn grader image (siftlab autograder prairielearn).
+#   docker build -t YOUR_DOCKERHUB_USER/siftlab-grader . && docker push YOUR_DOCKERHUB_USER/siftlab-grader
+# then name that image in the question's info.json (info.json here).
+FROM ubuntu:22.04
+RUN apt-get update \
+    && DEBIAN_FRONTEND=noninteractive apt-get install -y --no-install-recommends python3 python3-numpy \
+    && rm -rf /var/lib/apt/lists/*
+COPY siftlab run_grader /siftlab/
+COPY MyKITTI /siftlab/MyKITTI
+"#;
+
+const QUESTION: &str = r#"<pl-question-panel>
+  <p>Upload your <code>vision_tasks.py</code>. It is marked as the lab's automarker marks it:
+  each function on random valid calls, 10 s of CPU a call, 0.5 marks per task for no runtime
+  error plus 4.5 &times; the share of exactly right values, 20 in all.</p>
+</pl-question-panel>
+<pl-file-upload file-names="vision_tasks.py"></pl-file-upload>
+<pl-submission-panel>
+  <pl-external-grader-results></pl-external-grader-results>
+  <pl-file-preview></pl-file-preview>
+</pl-submission-panel>
+"#;
+
+/// The grader's entrypoint, with the run's seed, count and sequence.
+fn grader_script(seed: u64, n: u32, sequence: &str) -> String {
+    format!(
+        r#"#!/usr/bin/env bash
+# PrairieLearn runs this as root in the grader image for each submission. siftlab marks
+# /grade/student with seed {seed}, {n} calls per task: the student's code runs as a uid of its
+# own (the container tier: no new privileges, seccomp, no sockets; every process of that uid
+# killed before the mark is written), so it can neither write results.json nor touch /siftlab.
+# No results.json (siftlab failed) shows on PrairieLearn as a grading failure, never a mark.
+set -u
+RES=/grade/results
+mkdir -p "$RES"
+chown root:root "$RES" && chmod 0755 "$RES"
+rm -f "$RES/results.json"
+export SIFTLAB_PYTHON="${{SIFTLAB_PYTHON:-/usr/bin/python3}}"
+exec /siftlab/siftlab -d /siftlab/MyKITTI -s {sequence} mark /grade/student -n {n} --seed {seed} \
+    --prairielearn "$RES/results.json"
+"#
+    )
+}
+
+/// The question's info.json options: an external grader with a time limit
+/// that holds the slowest honest marking at half a CPU.
+fn info_json(n: u32) -> String {
+    let timeout = 60 + 24 * n;
+    format!(
+        r#"{{
+  "gradingMethod": "External",
+  "externalGradingOptions": {{
+    "enabled": true,
+    "image": "YOUR_DOCKERHUB_USER/siftlab-grader",
+    "entrypoint": "/siftlab/run_grader",
+    "timeout": {timeout}
+  }}
+}}
+"#
+    )
+}
+
 pub fn run(cli: &Cli, a: &AutograderArgs) -> Result<()> {
     let err = |what: String| Error::InvalidArgument(what);
     let binary = match &a.binary {
@@ -69,8 +137,16 @@ pub fn run(cli: &Cli, a: &AutograderArgs) -> Result<()> {
         files.push((PathBuf::from(rel), mode));
         Ok(())
     };
-    write("setup.sh", SETUP.as_bytes(), 0o755, &mut files)?;
-    write("run_autograder", run_script(a.seed, a.n, &cli.sequence).as_bytes(), 0o755, &mut files)?;
+    let gradescope = a.platform == "gradescope";
+    if gradescope {
+        write("setup.sh", SETUP.as_bytes(), 0o755, &mut files)?;
+        write("run_autograder", run_script(a.seed, a.n, &cli.sequence).as_bytes(), 0o755, &mut files)?;
+    } else {
+        write("Dockerfile", DOCKERFILE.as_bytes(), 0o644, &mut files)?;
+        write("run_grader", grader_script(a.seed, a.n, &cli.sequence).as_bytes(), 0o755, &mut files)?;
+        write("info.json", info_json(a.n).as_bytes(), 0o644, &mut files)?;
+        write("question.html", QUESTION.as_bytes(), 0o644, &mut files)?;
+    }
     write("siftlab", &elf, 0o755, &mut files)?;
     // The frames the cases are drawn from (frame_ids: 0 to the last), their poses, the licence.
     let copy = |from: &Path, rel: String, files: &mut Vec<(PathBuf, u32)>| -> Result<()> {
@@ -93,19 +169,28 @@ pub fn run(cli: &Cli, a: &AutograderArgs) -> Result<()> {
             copy(&root.join(&rel), format!("MyKITTI/{rel}"), &mut files)?;
         }
     }
-    let zip = out.join("autograder.zip");
-    crate::zip::write_stored(&zip, out, &files)?;
-    println!(
-        "{}: Gradescope's autograder (seed {}, {} calls per task, frames 0 to {}): upload autograder.zip \
-         (Autograder Settings → Zip file upload, Ubuntu 22.04 base image)",
-        out.display(),
-        a.seed,
-        a.n,
-        frames.last().copied().unwrap_or(0)
-    );
+    let last = frames.last().copied().unwrap_or(0);
+    if gradescope {
+        crate::zip::write_stored(&out.join("autograder.zip"), out, &files)?;
+        println!(
+            "{}: Gradescope's autograder (seed {}, {} calls per task, frames 0 to {last}): upload autograder.zip \
+             (Configure Autograder → Zip file upload, Ubuntu 22.04 base image)",
+            out.display(),
+            a.seed,
+            a.n
+        );
+    } else {
+        println!(
+            "{}: PrairieLearn's grader (seed {}, {} calls per task, frames 0 to {last}): build and push the image \
+             from its Dockerfile, put info.json's options and question.html in the question",
+            out.display(),
+            a.seed,
+            a.n
+        );
+    }
     if linked == Linking::Dynamic {
         eprintln!(
-            "siftlab: warning: {} is linked against this machine's C library, which Gradescope's Ubuntu 22.04 \
+            "siftlab: warning: {} is linked against this machine's C library, which the platform's Ubuntu 22.04 \
              may not have: build a static siftlab (rustup target add x86_64-unknown-linux-musl; cargo build \
              --release -p siftlab-cli --target x86_64-unknown-linux-musl) and pass it with --binary",
             binary.display()
@@ -170,9 +255,13 @@ mod tests {
     }
 
     #[test]
-    fn the_run_script_carries_the_seed_and_count() {
-        let s = run_script(7, 25, "00");
-        assert!(s.contains("mark /autograder/submission -n 25 --seed 7 \\"), "{s}");
+    fn the_run_scripts_carry_the_seed_count_and_sequence() {
+        let s = run_script(7, 25, "03");
+        assert!(s.contains("-s 03 mark /autograder/submission -n 25 --seed 7 \\"), "{s}");
         assert!(s.contains("--gradescope \"$RES/results.json\""));
+        let s = grader_script(7, 25, "00");
+        assert!(s.contains("-s 00 mark /grade/student -n 25 --seed 7 \\"), "{s}");
+        assert!(s.contains("--prairielearn \"$RES/results.json\""));
+        assert!(info_json(25).contains("\"timeout\": 660"), "{}", info_json(25));
     }
 }

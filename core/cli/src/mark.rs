@@ -62,21 +62,15 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
     if a.jobs.is_some() || a.resume || a.shard.is_some() {
         return Err(Error::InvalidArgument("--jobs, --resume and --shard go with --out DIR (a class)".into()));
     }
-    let started = std::time::Instant::now();
+    let started = Instant::now();
     // A folder (Gradescope's /autograder/submission): its first vision_tasks.py.
     let file = crate::submissions::single(arg)?;
     let n = a.n as usize;
     let Some(file) = file else {
         let marks = Marks::new(a.seed, n, Vec::new());
         eprintln!("siftlab: {} scores 0: no vision_tasks.py in it", arg.display());
-        if let Some(g) = &a.gradescope {
-            let text =
-                format!("{}: 0.00 / 20\nscores 0: no vision_tasks.py was found in the submission\n", arg.display());
-            atomic_write(
-                g,
-                gradescope_json(&marks, &text, true, "not run", started.elapsed().as_secs_f64()).as_bytes(),
-            )?;
-        }
+        let text = format!("{}: 0.00 / 20\nscores 0: no vision_tasks.py was found in the submission\n", arg.display());
+        write_platform_results(a, &marks, &text, true, "not run", started)?;
         return Ok(marks);
     };
     let name = file.file_name().map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
@@ -112,10 +106,27 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         let _ = write!(out, "{text}");
     }
     let _ = out.flush();
-    if let Some(g) = &a.gradescope {
-        atomic_write(g, gradescope_json(&marks, &text, false, tier, started.elapsed().as_secs_f64()).as_bytes())?;
-    }
+    write_platform_results(a, &marks, &text, false, tier, started)?;
     Ok(marks)
+}
+
+/// `--gradescope` and `--prairielearn`: each platform's results.json, written
+/// whole (a temporary file and a rename), after the marking is over.
+fn write_platform_results(
+    a: &MarkArgs,
+    marks: &Marks,
+    text: &str,
+    none_found: bool,
+    tier: &str,
+    started: Instant,
+) -> Result<()> {
+    if let Some(g) = &a.gradescope {
+        atomic_write(g, gradescope_json(marks, text, none_found, tier, started.elapsed().as_secs_f64()).as_bytes())?;
+    }
+    if let Some(p) = &a.prairielearn {
+        atomic_write(p, crate::report_files::prairielearn_json(marks, text, none_found, tier).as_bytes())?;
+    }
+    Ok(())
 }
 
 /// The pairs the cases use, SIFT of each frame once, and (with

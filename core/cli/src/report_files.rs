@@ -208,6 +208,38 @@ fn records(text: &str) -> std::result::Result<Vec<Vec<String>>, String> {
     Ok(out)
 }
 
+/// One task's text for a platform: its counts, then each failed case with
+/// its diagnosis and, where there is one, the expected and returned values.
+fn task_output(m: &Marks, t: Task, none_found: bool) -> String {
+    let tm = m.tasks.iter().find(|x| x.task == t);
+    let mut out = match (&m.rejection, tm, none_found) {
+        (_, _, true) => "no vision_tasks.py was found in the submission".to_string(),
+        (Some(r), _, _) => format!("the file scores 0: {r}"),
+        (None, Some(x), _) => format!("{} of {} calls correct, {} with an error", x.correct, x.calls, x.errors),
+        (None, None, _) => String::new(),
+    };
+    for r in m.results.iter().filter(|r| r.case.task() == t && r.status != CaseStatus::Correct) {
+        out.push_str(&format!(
+            "\n\n{} ({}): {}",
+            r.case.call_text(),
+            r.status.name(),
+            r.diagnosis.as_ref().map_or_else(String::new, |d| d.describe())
+        ));
+        if !r.expected.is_empty() {
+            out.push_str(&format!("\n  expected: {}\n  returned: {}", r.expected, r.returned));
+        }
+    }
+    out
+}
+
+fn task_marks(m: &Marks, t: Task) -> f64 {
+    m.tasks.iter().find(|x| x.task == t).map_or(0.0, |x| (x.marks * 100.0).round() / 100.0)
+}
+
+fn footer(sandbox: &str) -> String {
+    format!("marked by siftlab {} (sandbox: {sandbox})", env!("CARGO_PKG_VERSION"))
+}
+
 /// Gradescope's results.json: the score out of 20, the report as its
 /// output, and one test per task with that task's failed cases.
 /// `sandbox` names the tier the file ran in (`Tier::name`, or "not run"
@@ -216,34 +248,14 @@ pub fn gradescope_json(m: &Marks, report: &str, none_found: bool, sandbox: &str,
     let tests: Vec<Json> = Task::ALL
         .iter()
         .map(|&t| {
-            let tm = m.tasks.iter().find(|x| x.task == t);
-            let mut out = match (&m.rejection, tm, none_found) {
-                (_, _, true) => "no vision_tasks.py was found in the submission".to_string(),
-                (Some(r), _, _) => format!("the file scores 0: {r}"),
-                (None, Some(x), _) => {
-                    format!("{} of {} calls correct, {} with an error", x.correct, x.calls, x.errors)
-                }
-                (None, None, _) => String::new(),
-            };
-            for r in m.results.iter().filter(|r| r.case.task() == t && r.status != CaseStatus::Correct) {
-                out.push_str(&format!(
-                    "\n\n{} ({}): {}",
-                    r.case.call_text(),
-                    r.status.name(),
-                    r.diagnosis.as_ref().map_or_else(String::new, |d| d.describe())
-                ));
-                if !r.expected.is_empty() {
-                    out.push_str(&format!("\n  expected: {}\n  returned: {}", r.expected, r.returned));
-                }
-            }
-            let score = tm.map_or(0.0, |x| (x.marks * 100.0).round() / 100.0);
+            let score = task_marks(m, t);
             Json::Obj(vec![
                 ("name".into(), Json::Str(t.name().into())),
                 ("score".into(), Json::Float(score)),
                 ("max_score".into(), Json::Float(5.0)),
                 // Gradescope colours a test by it (passed: full marks).
                 ("status".into(), Json::Str(if score >= 5.0 { "passed" } else { "failed" }.into())),
-                ("output".into(), Json::Str(out)),
+                ("output".into(), Json::Str(task_output(m, t, none_found))),
                 ("output_format".into(), Json::Str("text".into())),
                 ("visibility".into(), Json::Str("visible".into())),
             ])
@@ -252,26 +264,71 @@ pub fn gradescope_json(m: &Marks, report: &str, none_found: bool, sandbox: &str,
     let top = Json::Obj(vec![
         ("score".into(), Json::Float((m.total * 100.0).round() / 100.0)),
         ("max_score".into(), Json::Float(20.0)),
-        (
-            "output".into(),
-            Json::Str(format!("{report}\nmarked by siftlab {} (sandbox: {sandbox})\n", env!("CARGO_PKG_VERSION"))),
-        ),
+        ("output".into(), Json::Str(format!("{report}\n{}\n", footer(sandbox)))),
         ("output_format".into(), Json::Str("text".into())),
         ("visibility".into(), Json::Str("visible".into())),
         ("execution_time".into(), Json::Float((seconds * 10.0).round() / 10.0)),
         ("tests".into(), Json::Arr(tests)),
         // Gradescope keeps extra_data with the result, unread: how it was marked.
-        (
-            "extra_data".into(),
-            Json::Obj(vec![
-                ("sandbox".into(), Json::Str(sandbox.into())),
-                ("siftlab".into(), Json::Str(env!("CARGO_PKG_VERSION").into())),
-                ("seed".into(), Json::Float(m.seed as f64)),
-                ("n".into(), Json::Float(m.cases_per_task as f64)),
-            ]),
-        ),
+        ("extra_data".into(), extra(m, sandbox)),
     ]);
     format!("{}\n", top.to_json())
+}
+
+fn extra(m: &Marks, sandbox: &str) -> Json {
+    Json::Obj(vec![
+        ("sandbox".into(), Json::Str(sandbox.into())),
+        ("siftlab".into(), Json::Str(env!("CARGO_PKG_VERSION").into())),
+        ("seed".into(), Json::Float(m.seed as f64)),
+        ("n".into(), Json::Float(m.cases_per_task as f64)),
+    ])
+}
+
+/// PrairieLearn's external grader results.json: `score` in [0, 1] (the
+/// total over 20), `gradable`, `message`, `output`, one test per task
+/// (`name`, `points`, `max_points`, `message`, `output`). A file the lab
+/// refuses before it runs (empty, too large, not printable ASCII, not
+/// Python) or none found is not gradable: PrairieLearn then shows
+/// `format_errors` and does not count the submission.
+pub fn prairielearn_json(m: &Marks, report: &str, none_found: bool, sandbox: &str) -> String {
+    use siftlab_mark::ErrorKind;
+    let format_error = match (&m.rejection, none_found) {
+        (_, true) => Some("no vision_tasks.py was found in the submission".to_string()),
+        (Some(r @ (Rejection::Empty | Rejection::TooLarge { .. } | Rejection::NotAscii { .. })), _) => {
+            Some(r.to_string())
+        }
+        (Some(r @ Rejection::Load { kind: ErrorKind::Syntax, .. }), _) => Some(r.to_string()),
+        _ => None,
+    };
+    let tests: Vec<Json> = Task::ALL
+        .iter()
+        .map(|&t| {
+            let points = task_marks(m, t);
+            let message = m.tasks.iter().find(|x| x.task == t).map_or_else(String::new, |x| {
+                format!("{} of {} calls correct, {} with an error", x.correct, x.calls, x.errors)
+            });
+            Json::Obj(vec![
+                ("name".into(), Json::Str(t.name().into())),
+                ("points".into(), Json::Float(points)),
+                ("max_points".into(), Json::Float(5.0)),
+                ("message".into(), Json::Str(message)),
+                ("output".into(), Json::Str(task_output(m, t, none_found))),
+            ])
+        })
+        .collect();
+    let score = ((m.total / 20.0).clamp(0.0, 1.0) * 10_000.0).round() / 10_000.0;
+    let mut top = vec![
+        ("gradable".into(), Json::Bool(format_error.is_none())),
+        ("score".into(), Json::Float(score)),
+        ("message".into(), Json::Str(format!("{:.2} / 20", m.total))),
+        ("output".into(), Json::Str(format!("{report}\n{}\n", footer(sandbox)))),
+        ("tests".into(), Json::Arr(tests)),
+        ("sandbox".into(), Json::Str(sandbox.into())),
+    ];
+    if let Some(e) = format_error {
+        top.push(("format_errors".into(), Json::Arr(vec![Json::Str(e)])));
+    }
+    format!("{}\n", Json::Obj(top).to_json())
 }
 
 /// Writes `bytes` to `path` through a temporary file in the same folder and
@@ -293,6 +350,30 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// PrairieLearn: a refused file is not gradable and says why; one that
+    /// loads and fails is gradable with 0; the score is over 1, not 20.
+    #[test]
+    fn prairielearn_grades_only_files_that_run() {
+        let parse =
+            |m: &Marks, none: bool| siftlab_core::json::parse(&prairielearn_json(m, "r", none, "container")).unwrap();
+        let empty = parse(&Marks::rejected(0, 1, Rejection::Empty), false);
+        assert!(matches!(empty.get("gradable"), Some(Json::Bool(false))));
+        let errors = empty.get("format_errors").and_then(Json::as_arr).unwrap();
+        assert_eq!(errors.len(), 1);
+        assert!(errors[0].as_str().unwrap().contains("empty"), "{:?}", errors[0]);
+        let none = parse(&Marks::new(0, 1, Vec::new()), true);
+        assert!(matches!(none.get("gradable"), Some(Json::Bool(false))));
+        let load = Rejection::Load { kind: siftlab_mark::ErrorKind::Runtime, message: "boom".into() };
+        let failed = parse(&Marks::rejected(0, 1, load), false);
+        assert!(matches!(failed.get("gradable"), Some(Json::Bool(true))));
+        assert!(failed.get("format_errors").is_none());
+        assert_eq!(failed.get("score").and_then(Json::as_f64), Some(0.0));
+        let tests = failed.get("tests").and_then(Json::as_arr).unwrap();
+        let names: Vec<&str> = tests.iter().map(|t| t.get("name").and_then(Json::as_str).unwrap()).collect();
+        assert_eq!(names, ["dt", "nn", "nndr", "matching_info"]);
+        assert!(tests.iter().all(|t| t.get("max_points").and_then(Json::as_f64) == Some(5.0)));
+    }
 
     #[test]
     fn csv_round_trips_with_quotes() {
