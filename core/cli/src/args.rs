@@ -65,7 +65,7 @@ pub struct AutograderArgs {
     #[arg(short = 'n', long = "cases", default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub n: u32,
     /// The siftlab binary to bundle (default: this one). Gradescope's image is Ubuntu 22.04:
-    /// give a static build (x86_64-unknown-linux-musl) when this one needs a newer C library.
+    /// give a static build (glibc with crt-static: docs/marking.md) when this one is dynamic.
     #[arg(long, value_name = "PATH")]
     pub binary: Option<PathBuf>,
 }

@@ -191,8 +191,8 @@ pub fn run(cli: &Cli, a: &AutograderArgs) -> Result<()> {
     if linked == Linking::Dynamic {
         eprintln!(
             "siftlab: warning: {} is linked against this machine's C library, which the platform's Ubuntu 22.04 \
-             may not have: build a static siftlab (rustup target add x86_64-unknown-linux-musl; cargo build \
-             --release -p siftlab-cli --target x86_64-unknown-linux-musl) and pass it with --binary",
+             may not have: build a static siftlab (RUSTFLAGS=\"-C target-feature=+crt-static\" cargo build \
+             --release -p siftlab-cli --target x86_64-unknown-linux-gnu) and pass it with --binary",
             binary.display()
         );
     }
