@@ -247,7 +247,8 @@ impl Python {
             None
         };
         // The container tier's entry (uid, filter), made before the fork.
-        let enter = if tier == Tier::Container { crate::container::Enter::new(marking_uid(job)) } else { None };
+        let contained = tier == Tier::Container;
+        let enter = if contained { crate::container::Enter::new(marking_uid(job)) } else { None };
         let mut harness_args: Vec<OsString> = vec!["-I".into(), "-S".into(), "-B".into(), "-u".into()];
         let mut cmd = if sandbox {
             let mut c = Command::new("bwrap");
@@ -346,8 +347,12 @@ impl Python {
                 }
                 // Its own session and process group: killed as one even without the sandbox.
                 libc::setsid();
-                if let Some(e) = &enter {
-                    e.apply()?;
+                match &enter {
+                    Some(e) => e.apply()?,
+                    // The container tier without its entry (no filter for this
+                    // architecture) must not run the file as root.
+                    None if contained => return Err(std::io::Error::from_raw_os_error(libc::EPERM)),
+                    None => {}
                 }
                 Ok(())
             });
