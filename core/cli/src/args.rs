@@ -109,8 +109,8 @@ pub struct MarkArgs {
     /// Print the report as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Run the file without the sandbox, with your own rights: only for your own file, or
-    /// inside a container that is itself the sandbox.
+    /// Run the file without the sandbox, with your own rights: only to check your own file
+    /// (inside a platform's container, siftlab runs its container tier instead).
     #[arg(long = "no-sandbox")]
     pub no_sandbox: bool,
 }
