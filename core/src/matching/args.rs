@@ -45,10 +45,14 @@ pub fn check_feature_id(feature: usize, n_keypoints: usize, frame: Option<usize>
     }
     let n = n_keypoints;
     Err(Error::InvalidArgument(match frame {
-        Some(frame) => format!(
-            "FEATURE_ID {feature} is out of range: frame {frame} has {n} keypoints (valid: 0 to {})",
-            n.saturating_sub(1)
+        // No keypoints: no id is valid, so no range to give.
+        Some(frame) if n == 0 => format!(
+            "FEATURE_ID {feature} is out of range: frame {frame} has no keypoints, so it has no feature to show \
+             (pick another frame)"
         ),
+        Some(frame) => {
+            format!("FEATURE_ID {feature} is out of range: frame {frame} has {n} keypoints (valid: 0 to {})", n - 1)
+        }
         None if n == 0 => format!("feature id {feature} is out of range: the previous frame has no keypoints"),
         None => format!(
             "feature id {feature} is out of range: the previous frame has {n} keypoints (valid ids: 0 to {})",
@@ -119,7 +123,7 @@ mod tests {
         );
         assert_eq!(
             check_feature_id(0, 0, Some(3)).unwrap_err().to_string(),
-            "FEATURE_ID 0 is out of range: frame 3 has 0 keypoints (valid: 0 to 0)"
+            "FEATURE_ID 0 is out of range: frame 3 has no keypoints, so it has no feature to show (pick another frame)"
         );
         assert_eq!(
             check_feature_id(7, 5, None).unwrap_err().to_string(),
