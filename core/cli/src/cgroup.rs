@@ -57,15 +57,20 @@ impl Cgroup {
         Ok(g)
     }
 
-    fn make_v1(root: &Path, own: &str, name: &str) -> Result<Cgroup, String> {
-        let mut g = Cgroup {
-            v2: false,
+    /// A cgroup with no folder yet (make_v1 adds them one controller at a time).
+    fn empty(v2: bool) -> Cgroup {
+        Cgroup {
+            v2,
             dirs: Vec::new(),
             memory: PathBuf::new(),
             cpuacct: PathBuf::new(),
             cpu: PathBuf::new(),
             join: Vec::new(),
-        };
+        }
+    }
+
+    fn make_v1(root: &Path, own: &str, name: &str) -> Result<Cgroup, String> {
+        let mut g = Cgroup::empty(false);
         for c in CONTROLLERS {
             // "4:memory:/a/b" or "1:cpu,cpuacct:/a/b" in /proc/self/cgroup.
             let path = own
@@ -286,14 +291,7 @@ mod tests {
     /// panicked, ending the marking before any mark.
     #[test]
     fn a_cgroup_with_no_folder_is_dropped_quietly() {
-        let g = Cgroup {
-            v2: false,
-            dirs: Vec::new(),
-            memory: PathBuf::new(),
-            cpuacct: PathBuf::new(),
-            cpu: PathBuf::new(),
-            join: Vec::new(),
-        };
+        let g = Cgroup::empty(false);
         g.kill_all();
         drop(g);
     }
