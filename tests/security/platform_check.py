@@ -41,6 +41,7 @@ root, bubblewrap; Python 3.8+, standard library only.
 """
 
 import argparse
+import base64
 import concurrent.futures
 import hashlib
 import json
@@ -227,6 +228,9 @@ def run_case(platform, variant, bundle, siftlab, n, seed, python, keep, control=
             tasks = {t.get("name"): t.get("score") for t in got.get("tests", [])}
         else:
             reasons += prairielearn_fields(got, variant == "syntax")
+            # PrairieLearn's images: the first wrong case of each task drawn
+            # (inverted: nndr's), a JPEG data URL, the file under 1 MB.
+            reasons += prairielearn_images(got, os.path.getsize(res_path), {"inverted": ["nndr"]}.get(variant, []))
             total = round(got.get("score", -1) * 20, 2) if isinstance(got.get("score"), float) else None
             tasks = {t.get("name"): t.get("points") for t in got.get("tests", [])}
         if total != want_total:
@@ -269,6 +273,25 @@ def prairielearn_fields(j, not_gradable):
                 bad.append("test %s: %s is %r" % (t.get("name"), key, t.get(key)))
         if t.get("max_points") != 5.0:
             bad.append("test %s: max_points %r" % (t.get("name"), t.get("max_points")))
+    return bad
+
+
+def prairielearn_images(j, size, want):
+    bad = []
+    if size > 1000000:
+        bad.append("results.json is %d bytes, over PrairieLearn's 1 MB" % size)
+    tests = j.get("tests") or []
+    have = [t.get("name") for t in tests if "images" in t]
+    if have != want:
+        bad.append("pictures for %s, not %s" % (have, want))
+    for t in tests:
+        for im in t.get("images", []):
+            url = im.get("url", "") if isinstance(im, dict) else ""
+            head = "data:image/jpeg;base64,"
+            if not isinstance(im.get("label"), str) or not url.startswith(head):
+                bad.append("test %s: image %r" % (t.get("name"), str(im)[:80]))
+            elif not base64.b64decode(url[len(head):]).startswith(b"\xff\xd8\xff"):
+                bad.append("test %s: the image is not a JPEG" % t.get("name"))
     return bad
 
 

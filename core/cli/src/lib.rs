@@ -17,6 +17,7 @@ mod harness_io;
 pub mod mark;
 pub mod match_all;
 mod meter;
+mod pictures;
 mod report_files;
 mod sandbox;
 mod seal;

@@ -70,12 +70,13 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         let marks = Marks::new(a.seed, n, Vec::new());
         eprintln!("siftlab: {} scores 0: no vision_tasks.py in it", arg.display());
         let text = format!("{}: 0.00 / 20\nscores 0: no vision_tasks.py was found in the submission\n", arg.display());
-        write_platform_results(a, &marks, &text, true, "not run", started)?;
+        write_platform_results(a, &marks, &text, true, "not run", started, &[])?;
         return Ok(marks);
     };
     let name = file.file_name().map_or_else(|| file.display().to_string(), |n| n.to_string_lossy().into_owned());
     let src = crate::submissions::read_single(arg, &file)?;
     let mut tier = "not run";
+    let mut pictures = Vec::new();
     let marks = match crate::submissions::checked(&src) {
         Err(rejection) => {
             eprintln!("siftlab: {name} scores 0: {rejection}");
@@ -95,7 +96,11 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
             // SIFT of each frame the cases use, once, as a class marking does.
             let (pairs, _) = frame_pairs(&ds, &sift_params(cli), &siftlab_mark::plan(a.seed, n, &frames), false)?;
             let session = Session::new(source, a.seed, n, &frames, Limits::default());
-            runner.mark(session, &pairs, 0, true)?
+            let marks = runner.mark(session, &pairs, 0, true)?;
+            if a.prairielearn.is_some() {
+                pictures = crate::pictures::first_wrong(&marks, &ds, &pairs);
+            }
+            marks
         }
     };
     let text = format!("{}: {:.2} / 20\n{}", escaped(&name, 200), marks.total, report_text(&marks));
@@ -106,7 +111,7 @@ pub fn run(cli: &Cli, a: &MarkArgs) -> Result<Marks> {
         let _ = write!(out, "{text}");
     }
     let _ = out.flush();
-    write_platform_results(a, &marks, &text, false, tier, started)?;
+    write_platform_results(a, &marks, &text, false, tier, started, &pictures)?;
     Ok(marks)
 }
 
@@ -119,12 +124,13 @@ fn write_platform_results(
     none_found: bool,
     tier: &str,
     started: Instant,
+    pictures: &[crate::pictures::Picture],
 ) -> Result<()> {
     if let Some(g) = &a.gradescope {
         atomic_write(g, gradescope_json(marks, text, none_found, tier, started.elapsed().as_secs_f64()).as_bytes())?;
     }
     if let Some(p) = &a.prairielearn {
-        atomic_write(p, crate::report_files::prairielearn_json(marks, text, none_found, tier).as_bytes())?;
+        atomic_write(p, crate::report_files::prairielearn_json(marks, text, none_found, tier, pictures).as_bytes())?;
     }
     Ok(())
 }

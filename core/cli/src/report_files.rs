@@ -1,6 +1,7 @@
 //! The files a class marking writes: grades.csv rows (RFC 4180), each
 //! student's Gradescope results.json, and the atomic write they all use.
 
+use crate::pictures::Picture;
 use sha2::{Digest, Sha256};
 use siftlab_core::error::{Error, Result};
 use siftlab_mark::{Json, Marks, Rejection, Status as CaseStatus, Task};
@@ -290,7 +291,20 @@ fn extra(m: &Marks, sandbox: &str) -> Json {
 /// refuses before it runs (empty, too large, not printable ASCII, not
 /// Python) or none found is not gradable: PrairieLearn then shows
 /// `format_errors` and does not count the submission.
-pub fn prairielearn_json(m: &Marks, report: &str, none_found: bool, sandbox: &str) -> String {
+pub fn prairielearn_json(m: &Marks, report: &str, none_found: bool, sandbox: &str, pictures: &[Picture]) -> String {
+    // The whole file stays under PrairieLearn's 1 MB: pictures are left out
+    // from the last task back until it fits.
+    (0..=pictures.len())
+        .rev()
+        .map(|k| prairielearn_with(m, report, none_found, sandbox, &pictures[..k]))
+        .find(|j| j.len() <= PRAIRIELEARN_MAX_BYTES)
+        .unwrap_or_else(|| prairielearn_with(m, report, none_found, sandbox, &[]))
+}
+
+/// PrairieLearn reads results.json files of up to 1 MB.
+pub const PRAIRIELEARN_MAX_BYTES: usize = 1_000_000;
+
+fn prairielearn_with(m: &Marks, report: &str, none_found: bool, sandbox: &str, pictures: &[Picture]) -> String {
     use siftlab_mark::ErrorKind;
     let format_error = match (&m.rejection, none_found) {
         (_, true) => Some("no vision_tasks.py was found in the submission".to_string()),
@@ -307,13 +321,27 @@ pub fn prairielearn_json(m: &Marks, report: &str, none_found: bool, sandbox: &st
             let message = m.tasks.iter().find(|x| x.task == t).map_or_else(String::new, |x| {
                 format!("{} of {} calls correct, {} with an error", x.correct, x.calls, x.errors)
             });
-            Json::Obj(vec![
+            let mut test = vec![
                 ("name".into(), Json::Str(t.name().into())),
                 ("points".into(), Json::Float(points)),
                 ("max_points".into(), Json::Float(5.0)),
                 ("message".into(), Json::Str(message)),
                 ("output".into(), Json::Str(task_output(m, t, none_found))),
-            ])
+            ];
+            let images: Vec<Json> = pictures
+                .iter()
+                .filter(|p| p.task == t)
+                .map(|p| {
+                    Json::Obj(vec![
+                        ("label".into(), Json::Str(p.label.clone())),
+                        ("url".into(), Json::Str(p.url.clone())),
+                    ])
+                })
+                .collect();
+            if !images.is_empty() {
+                test.push(("images".into(), Json::Arr(images)));
+            }
+            Json::Obj(test)
         })
         .collect();
     let score = ((m.total / 20.0).clamp(0.0, 1.0) * 10_000.0).round() / 10_000.0;
@@ -355,8 +383,9 @@ mod tests {
     /// loads and fails is gradable with 0; the score is over 1, not 20.
     #[test]
     fn prairielearn_grades_only_files_that_run() {
-        let parse =
-            |m: &Marks, none: bool| siftlab_core::json::parse(&prairielearn_json(m, "r", none, "container")).unwrap();
+        let parse = |m: &Marks, none: bool| {
+            siftlab_core::json::parse(&prairielearn_json(m, "r", none, "container", &[])).unwrap()
+        };
         let empty = parse(&Marks::rejected(0, 1, Rejection::Empty), false);
         assert!(matches!(empty.get("gradable"), Some(Json::Bool(false))));
         let errors = empty.get("format_errors").and_then(Json::as_arr).unwrap();
@@ -373,6 +402,36 @@ mod tests {
         let names: Vec<&str> = tests.iter().map(|t| t.get("name").and_then(Json::as_str).unwrap()).collect();
         assert_eq!(names, ["dt", "nn", "nndr", "matching_info"]);
         assert!(tests.iter().all(|t| t.get("max_points").and_then(Json::as_f64) == Some(5.0)));
+    }
+
+    /// Pictures go to their task's test, and are left out from the last
+    /// back while the file would pass PrairieLearn's 1 MB.
+    #[test]
+    fn prairielearn_pictures_fit_in_a_megabyte() {
+        let picture = |task, kb: usize| Picture { task, label: format!("{kb} KB"), url: "A".repeat(kb * 1000) };
+        let pictures = [picture(Task::Dt, 400), picture(Task::Nndr, 500), picture(Task::MatchingInfo, 200)];
+        let m = Marks::new(0, 1, Vec::new());
+        let text = prairielearn_json(&m, "r", false, "container", &pictures);
+        assert!(text.len() <= PRAIRIELEARN_MAX_BYTES, "{} bytes", text.len());
+        let j = siftlab_core::json::parse(&text).unwrap();
+        let labels: Vec<(String, String)> = j
+            .get("tests")
+            .and_then(Json::as_arr)
+            .unwrap()
+            .iter()
+            .flat_map(|t| {
+                let name = t.get("name").and_then(Json::as_str).unwrap().to_string();
+                t.get("images")
+                    .and_then(Json::as_arr)
+                    .unwrap_or(&[])
+                    .iter()
+                    .map(move |i| (name.clone(), i.get("label").and_then(Json::as_str).unwrap().to_string()))
+            })
+            .collect();
+        // 400 + 500 fit; the third would pass 1 MB.
+        assert_eq!(labels, [("dt".to_string(), "400 KB".to_string()), ("nndr".to_string(), "500 KB".to_string())]);
+        let none = prairielearn_json(&m, "r", false, "container", &[picture(Task::Dt, 1200)]);
+        assert!(!none.contains("images") && none.len() < 10_000);
     }
 
     #[test]

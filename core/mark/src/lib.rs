@@ -32,7 +32,7 @@ mod source;
 
 pub use b64::{base64, unbase64};
 pub use cases::{plan, threshold_text, Case, Task, DEFAULT_CASES, NUM_FEATURES};
-pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Status};
+pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Difference, Status};
 pub use escape::{escaped, is_clean};
 pub use knn::{knn_answer, knn_answer_until, max_rows};
 pub use protocol::{
@@ -40,7 +40,7 @@ pub use protocol::{
     MAX_LINE_BYTES, MAX_MESSAGE_CHARS,
 };
 pub use pyvalue::{info_type_problem, info_value, PyValue};
-pub use reference::{reference, Expected};
+pub use reference::{reference, Expected, Got};
 pub use report::{report_json, report_text, Marks, TaskMarks};
 pub use session::{Limits, Outcome, Pairs, Session, Step, WallClock};
 pub use siftlab_core::json::{parse as parse_json, Json};

@@ -212,7 +212,15 @@ mod tests {
             Status::Wrong => Some(Diagnosis::Order),
             Status::Error => Some(Diagnosis::Timeout { seconds: 10.0 }),
         };
-        CaseResult { case, status, diagnosis, expected: "e".into(), returned: "r".into(), seconds: 0.25 }
+        CaseResult {
+            case,
+            status,
+            diagnosis,
+            expected: "e".into(),
+            returned: "r".into(),
+            seconds: 0.25,
+            difference: None,
+        }
     }
 
     #[test]

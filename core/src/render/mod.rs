@@ -18,6 +18,8 @@
 // Every unsafe operation sits in its own `unsafe` block with the reason it
 // holds, also inside `unsafe fn`s (render has none today).
 
+// The marker's picture of a wrong value (PrairieLearn's images).
+pub mod difference;
 pub(crate) mod draw;
 pub(crate) mod flow;
 pub(crate) mod font;
@@ -46,6 +48,16 @@ pub fn encode_png(img: &RgbImage) -> Result<Vec<u8>> {
     let enc = image::codecs::png::PngEncoder::new(&mut out);
     image::ImageEncoder::write_image(enc, img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)
         .map_err(|e| Error::Decode(format!("cannot encode the PNG: {e}")))?;
+    Ok(out)
+}
+
+/// Encodes an RGB image as JPEG bytes at `quality` (1 to 100): the
+/// marker's pictures of photographs, a tenth of their PNG's size.
+pub fn encode_jpeg(img: &RgbImage, quality: u8) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut out, quality.clamp(1, 100));
+    image::ImageEncoder::write_image(enc, img.as_raw(), img.width(), img.height(), image::ExtendedColorType::Rgb8)
+        .map_err(|e| Error::Decode(format!("cannot encode the JPEG: {e}")))?;
     Ok(out)
 }
 

@@ -4,6 +4,7 @@
 //! [`failed_call`] for a case that got no reply.
 
 use super::diagnosis::Diagnosis;
+use super::difference::Difference;
 use super::info::{diagnose_info, info_shape_problem};
 use super::matches::diagnose_matches;
 use crate::cases::Case;
@@ -50,6 +51,8 @@ pub struct CaseResult {
     pub returned: String,
     /// Wall time of the call, knnMatch requests included.
     pub seconds: f64,
+    /// What a picture of a wrong value shows (None when correct or no value).
+    pub difference: Option<Difference>,
 }
 
 /// Characters of a value shown in a report.
@@ -71,6 +74,11 @@ pub fn judge(
         expected: if status == Status::Correct { String::new() } else { expected },
         returned: if status == Status::Correct { String::new() } else { escaped(&returned, SHOWN) },
         seconds,
+        difference: None,
+    };
+    let wrong = |diagnosis, expected, returned, difference| CaseResult {
+        difference: Some(difference),
+        ..result(Status::Wrong, Some(diagnosis), expected, returned)
     };
     match reply {
         Reply::Error { message, kind } => {
@@ -92,7 +100,9 @@ pub fn judge(
                     }
                     let at = difference_at(want, &got);
                     let d = diagnose_matches(&case.strategy(), want, &got, prev, cur);
-                    result(Status::Wrong, Some(d), expected_text(want, at), got_lists_text(&got, at))
+                    // Lists that differ have a first differing one.
+                    let shown = Difference::of_matches(at.map_or(0, |a| a.0), want, &got);
+                    wrong(d, expected_text(want, at), got_lists_text(&got, at), shown)
                 }
             },
             Expected::Info { matches, info } => {
@@ -110,16 +120,17 @@ pub fn judge(
                 // Past the base class's three type checks the reference
                 // marker only compares: a value of another shape inside is
                 // wrong, not an error (it keeps the task's 0.5).
+                let picture = Difference::of_info(info, &value);
                 if let Some(what) = info_shape_problem(&value) {
                     let d = if matches.is_empty() { Diagnosis::EmptyCase(None) } else { Diagnosis::InfoShape(what) };
-                    return result(Status::Wrong, Some(d), info.to_string(), shown);
+                    return wrong(d, info.to_string(), shown, picture);
                 }
                 let d = if info_equal(info, &value) {
                     Diagnosis::InfoTypes
                 } else {
                     diagnose_info(matches, info, &value, prev, cur)
                 };
-                result(Status::Wrong, Some(d), info.to_string(), shown)
+                wrong(d, info.to_string(), shown, picture)
             }
         },
     }
@@ -134,6 +145,7 @@ pub fn failed_call(case: &Case, expected: &Expected, diagnosis: Diagnosis, secon
         expected: expected_summary(expected),
         returned: "no value".into(),
         seconds,
+        difference: None,
     }
 }
 

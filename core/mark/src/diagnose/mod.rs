@@ -7,9 +7,11 @@
 //! One file per job: `judge.rs` the verdict of a case ([`judge`],
 //! [`failed_call`]), `diagnosis.rs` the kinds of mistake and their words to
 //! the student ([`Diagnosis`]), `matches.rs` why dt / nn / nndr's lists
-//! differ, `info.rs` why matching_info's tuple differs.
+//! differ, `info.rs` why matching_info's tuple differs, `difference.rs` what
+//! a picture of a wrong value shows.
 
 mod diagnosis;
+mod difference;
 mod info;
 mod judge;
 mod matches;
@@ -17,4 +19,5 @@ mod matches;
 mod tests;
 
 pub use diagnosis::Diagnosis;
+pub use difference::Difference;
 pub use judge::{failed_call, judge, CaseResult, Status};
