@@ -17,6 +17,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
 import { suite } from './harness.mjs';
+import { classSummary } from './app/common.mjs';
 
 const HERE = path.dirname(fileURLToPath(import.meta.url));
 const ENGINE = process.env.E2E_ENGINE || 'chromium';
@@ -115,6 +116,14 @@ async function check(state) {
     assert.deepEqual(violations, [], `${state} at ${width} px: axe violations`);
   }
 }
+
+test('class results: a class\'s summary loaded', async () => {
+  await page.goto(BASE);
+  await idle();
+  await page.setInputFiles('[data-testid="class-file"]', classSummary().file);
+  await page.waitForSelector('[data-testid="class-summary"]', { timeout: 30000 });
+  await check('class');
+});
 
 test('the demo\'s result', async () => {
   await page.goto(BASE);

@@ -4,6 +4,7 @@
 //! literals, the KITTI sequence and its camera, the odometry views' logic
 //! ([`odometry`]) and the figures' geometry.
 
+pub mod class_results;
 pub mod exercise;
 pub mod frame;
 pub mod frameset;

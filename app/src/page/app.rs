@@ -1,6 +1,7 @@
 //! The whole page: the explorer in the lab's order, and the link that
 //! restores a view (the URL state read into the lab and written back).
 
+use super::class_results::ClassResults;
 use super::mark::MarkMyCode;
 use super::matching::{Controls, Exercises, Explanation, FramesView, Loader, ResultPanel, SelfCheck, Status};
 use super::odometry::OdometryView;
@@ -41,6 +42,7 @@ pub fn Explorer(views: Views) -> impl IntoView {
             <SeeInside/>
             <OdometryView/>
             <MarkMyCode/>
+            <ClassResults/>
         </main>
         <footer>
             <p>

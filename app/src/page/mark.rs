@@ -51,12 +51,17 @@ fn Report(o: Outcome) -> impl IntoView {
         .map(|r| {
             let why = r.diagnosis.as_ref().map(|d| d.describe()).unwrap_or_default();
             let code = r.diagnosis.as_ref().map(|d| d.code()).unwrap_or_default();
+            // The explorer on this case's pair, strategy, threshold and feature, in a
+            // new tab: the mark stays where it is.
+            let link = siftlab_mark::result_link(r);
             view! {
                 <li data-testid="mark-failure" data-task=r.case.task().name() data-diagnosis=code data-status=r.status.name()>
                     <p><code>{r.case.call_text()}</code>" — "<strong>{r.status.name()}</strong></p>
                     <p class="small">"expected: "<code class="wrap">{r.expected.clone()}</code></p>
                     <p class="small">"returned: "<code class="wrap">{r.returned.clone()}</code></p>
                     <p class="small diag">{why}</p>
+                    <p class="small"><a href=link target="_blank" rel="noopener" data-testid="see-case">
+                        "see this case"</a>" in the explorer (frames, matches, the feature)"</p>
                 </li>
             }
         })

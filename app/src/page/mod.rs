@@ -5,6 +5,7 @@
 //! lab's order and keeps the link in step.
 
 mod app;
+mod class_results;
 mod legend;
 mod mark;
 mod matching;

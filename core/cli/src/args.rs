@@ -74,7 +74,7 @@ pub struct AutograderArgs {
 pub struct MarkArgs {
     /// The student's vision_tasks.py; with --out, any number of files and folders (a folder
     /// with vision_tasks.py at its top is one student, any other holds one per sub-folder or
-    /// <student id>.py); with --merge, shard output folders.
+    /// <student id>.py); with --merge or --summary, class output folders.
     #[arg(required = true, value_name = "SUBMISSION")]
     pub files: Vec<PathBuf>,
     /// Mark a whole class into DIR: grades.csv and, per student, report.txt, report.json and
@@ -93,6 +93,11 @@ pub struct MarkArgs {
     /// Join the grades.csv of shard output folders (the SUBMISSION arguments) into --out.
     #[arg(long)]
     pub merge: bool,
+    /// Rebuild the class summary (summary.html and summary.json: marks, mistakes, hardest cases)
+    /// from class output folders (the SUBMISSION arguments: one, or its shards) into that folder
+    /// or --out.
+    #[arg(long, conflicts_with = "merge")]
+    pub summary: bool,
     /// Write Gradescope's results.json for one submission (a file, or a folder holding vision_tasks.py).
     #[arg(long, value_name = "RESULTS_JSON")]
     pub gradescope: Option<PathBuf>,

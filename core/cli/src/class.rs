@@ -160,10 +160,12 @@ fn run_class(cli: &Cli, a: &MarkArgs, out: &Path) -> Result<Vec<Row>> {
     });
     let rows: Vec<Row> = rows.into_values().collect();
     atomic_write(&out.join("grades.csv"), Row::csv(&rows).as_bytes())?;
+    // The lecturer's picture of the class (a shard's is of its slice).
+    crate::summary::write(&[out], out)?;
     let failed = rows.iter().filter(|r| r.status == Status::Failed).count();
     let refused = rows.iter().filter(|r| r.status == Status::Refused).count();
     eprintln!(
-        "grades: {} ({} row(s), {failed} failed, {refused} refused) in {:.1} s",
+        "grades: {} ({} row(s), {failed} failed, {refused} refused) in {:.1} s; summary.html beside it",
         out.join("grades.csv").display(),
         rows.len(),
         t0.elapsed().as_secs_f64()
@@ -300,6 +302,8 @@ pub fn merge(a: &MarkArgs, out: &Path) -> i32 {
         std::fs::create_dir_all(out)
             .map_err(|e| Error::InvalidArgument(format!("cannot create {}: {e}", out.display())))?;
         atomic_write(&out.join("grades.csv"), Row::csv(&rows).as_bytes())?;
+        let shards: Vec<&Path> = a.files.iter().map(|d| d.as_path()).collect();
+        crate::summary::write(&shards, out)?;
         eprintln!("grades: {} ({} student(s))", out.join("grades.csv").display(), rows.len());
         Ok(rows)
     };

@@ -23,6 +23,7 @@ mod sandbox;
 mod seal;
 mod seccomp;
 mod submissions;
+mod summary;
 pub mod trajectory;
 pub mod visual;
 mod zip;
@@ -58,7 +59,10 @@ pub fn main() -> i32 {
     }
     // mark's exit status says whether the file got full marks.
     if let Command::Mark(a) = &cli.command {
-        // One file, a class (--out) or the join of shards (--merge).
+        // One file, a class (--out), the join of shards (--merge) or a summary.
+        if a.summary {
+            return summary::main(&a.files, a.out.as_deref());
+        }
         return match (&a.out, a.merge) {
             (Some(out), true) => class::merge(a, out),
             (None, true) => {

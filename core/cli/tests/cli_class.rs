@@ -70,6 +70,9 @@ const SUB: [&str; 12] = [
 
 /// A class folder at `dir` of the students `keep` accepts: (student id, the
 /// file marked or None).
+/// The fixtures with one common mistake each, in the class twice.
+const MISTAKES: [&str; 9] = ["le", "k100", "inverted", "round", "empty", "nn_none", "nn_zero", "wrong_type", "float64"];
+
 fn class(dir: &Path, keep: impl Fn(&str) -> bool) -> Vec<(String, Option<PathBuf>)> {
     let fixtures = repo_root().join("tests/fixtures/mark");
     let mut students = Vec::new();
@@ -84,6 +87,10 @@ fn class(dir: &Path, keep: impl Fn(&str) -> bool) -> Vec<(String, Option<PathBuf
     };
     for v in ["good", "le", "k100", "inverted", "round", "empty", "nn_none", "nn_zero", "wrong_type", "float64"] {
         folder(&format!("s_{v}"), &fixtures.join(v).join("vision_tasks.py"));
+    }
+    // Each common mistake twice (the class summary counts students per mistake).
+    for v in MISTAKES {
+        folder(&format!("t_{v}"), &fixtures.join(v).join("vision_tasks.py"));
     }
     for v in ["syntax", "nonascii", "imports"] {
         folder(&format!("z_{v}"), &fixtures.join(v).join("vision_tasks.py"));
@@ -149,6 +156,59 @@ fn rows(grades: &str) -> BTreeMap<String, String> {
     lines.map(|l| (l.split(',').next().unwrap_or_default().to_string(), l.to_string())).collect()
 }
 
+/// summary.json against a count made here from grades.csv and each
+/// student's report.json: statuses, calls per task, and per diagnosis code
+/// the students and cases, in the ranking's order (most students, then
+/// most cases, then the code).
+fn class_summary_counts(out: &Path, rows: &BTreeMap<String, String>) {
+    let s = json::parse(&fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let int = |j: Option<&Json>| j.and_then(Json::as_i64).unwrap_or(-1);
+    assert_eq!(int(s.get("students")), rows.len() as i64);
+    let mut status: BTreeMap<String, i64> = BTreeMap::new();
+    let mut codes: BTreeMap<String, (std::collections::BTreeSet<String>, i64)> = BTreeMap::new();
+    let mut calls = [0i64; 4];
+    let tasks = ["dt", "nn", "nndr", "matching_info"];
+    for (id, row) in rows {
+        // The ids here have no comma: the 7th field is the status.
+        let st = row.split(',').nth(6).unwrap().to_string();
+        *status.entry(st.clone()).or_default() += 1;
+        if st != "ok" && st != "zero" {
+            continue;
+        }
+        let r = json::parse(&fs::read_to_string(student_out(out, id).join("report.json")).unwrap()).unwrap();
+        for c in r.get("cases").and_then(Json::as_arr).unwrap_or(&[]) {
+            let task = c.get("task").and_then(Json::as_str).unwrap();
+            calls[tasks.iter().position(|t| *t == task).unwrap()] += 1;
+            if let Some(code) = c.get("diagnosis").and_then(Json::as_str) {
+                let e = codes.entry(code.to_string()).or_default();
+                e.0.insert(id.clone());
+                e.1 += 1;
+            }
+        }
+    }
+    for (st, n) in &status {
+        assert_eq!(int(s.get("status").and_then(|x| x.get(st))), *n, "status {st}");
+    }
+    for (i, t) in s.get("tasks").and_then(Json::as_arr).unwrap().iter().enumerate() {
+        assert_eq!(int(t.get("calls")), calls[i], "{}", tasks[i]);
+    }
+    let mut want: Vec<(String, i64, i64)> = codes.into_iter().map(|(c, (who, n))| (c, who.len() as i64, n)).collect();
+    want.sort_by(|a, b| (b.1, b.2).cmp(&(a.1, a.2)).then_with(|| a.0.cmp(&b.0)));
+    let got: Vec<(String, i64, i64)> = s
+        .get("mistakes")
+        .and_then(Json::as_arr)
+        .unwrap()
+        .iter()
+        .map(|m| {
+            (m.get("code").and_then(Json::as_str).unwrap().to_string(), int(m.get("students")), int(m.get("cases")))
+        })
+        .collect();
+    assert_eq!(got, want);
+    assert!(got.len() >= 3 && got[0].1 >= 2, "a class of common mistakes shows them: {got:?}");
+    let html = fs::read_to_string(out.join("summary.html")).unwrap();
+    assert!(html.contains(&format!("<code>{}</code>", got[0].0)));
+}
+
 /// The folder of a student's own files in a class's output.
 fn student_out(out: &Path, id: &str) -> PathBuf {
     out.join("students").join(id)
@@ -179,6 +239,7 @@ fn a_whole_class() {
     assert!(row("z_nonascii").ends_with(",0.00,zero,not ASCII"));
     assert!(row("z_imports").ends_with(",0.00,zero,import"));
     assert!(row("bare_empty").ends_with(",0.00,zero,empty"));
+    class_summary_counts(&root.join("jobs2"), &whole);
     eprintln!(
         "class of {}: --jobs 2 {two_s:.1} s ({:.0} submissions/hour)",
         students.len(),
@@ -209,6 +270,12 @@ fn a_whole_class() {
     for (id, file) in &students {
         let Some(file) = file else { continue };
         if id.starts_with("h_") && !SUB.contains(&id.as_str()) {
+            continue;
+        }
+        // A second copy of a mistake's file: the same row as the first.
+        if let Some(v) = id.strip_prefix("t_") {
+            let same = |r: &str| r.split_once(',').map(|x| x.1.to_string());
+            assert_eq!(same(row(id)), same(row(&format!("s_{v}"))), "{id}");
             continue;
         }
         let alone = run(&mut siftlab(&[file.to_str().unwrap(), "-n", "1", "--seed", "5", "--json"], &ds));
@@ -258,6 +325,13 @@ fn a_whole_class() {
     let merged = run(&mut siftlab(&["--merge", &o("shard1"), &o("shard2"), &o("shard3"), "--out", &o("merged")], &ds));
     assert_eq!(merged.status.code(), Some(0), "{}", text(&merged.stderr));
     assert_eq!(fs::read_to_string(root.join("merged/grades.csv")).unwrap(), grades);
+    // The shards' summary is the one-run class's; --summary rebuilds it.
+    let summary_of = |d: &str| fs::read_to_string(root.join(d).join("summary.json")).unwrap();
+    assert_eq!(summary_of("merged"), summary_of("jobs1"));
+    fs::remove_file(root.join("jobs1/summary.json")).unwrap();
+    let again = run(&mut siftlab(&["--summary", &o("jobs1")], &ds));
+    assert_eq!(again.status.code(), Some(0), "{}", text(&again.stderr));
+    assert_eq!(summary_of("jobs1"), summary_of("merged"));
 
     // Gradescope's results.json: the fields the autograder format asks for.
     for id in ["s_inverted", "z_syntax", "no_file"] {

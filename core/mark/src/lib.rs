@@ -29,6 +29,7 @@ mod reference;
 mod report;
 mod session;
 mod source;
+mod summary;
 
 pub use b64::{base64, unbase64};
 pub use cases::{plan, threshold_text, Case, Task, DEFAULT_CASES, NUM_FEATURES};
@@ -45,6 +46,7 @@ pub use report::{report_json, report_text, Marks, TaskMarks};
 pub use session::{Limits, Outcome, Pairs, Session, Step, WallClock};
 pub use siftlab_core::json::{parse as parse_json, Json};
 pub use source::{check_source, Rejection, MAX_SOURCE_BYTES};
+pub use summary::{case_link, result_link, summary, Entry as SummaryEntry};
 
 /// The Python side of the marking, as files: the harness and the two shims
 /// it loads (`py/` of this crate). `siftlab mark` writes them into its

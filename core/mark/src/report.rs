@@ -3,7 +3,7 @@
 //! task, 20 in all; and the report, as text and as JSON.
 
 use crate::cases::{threshold_text, Case, Task};
-use crate::diagnose::{CaseResult, Status};
+use crate::diagnose::{CaseResult, Difference, Status};
 use crate::source::Rejection;
 use siftlab_core::json::{push_f64, push_str};
 use std::fmt::Write as _;
@@ -123,10 +123,11 @@ fn round4(v: f64) -> f64 {
 
 /// The report as one JSON object:
 /// `{"seed", "cases_per_task", "total", "full_marks", "rejection", "tasks": [{"task", "calls", "correct",
-/// "errors", "marks"}], "cases": [{"task", "index", "frame", "threshold", "strategy", "feature", "status",
+/// "errors", "marks"}], "cases": [{"task", "index", "frame", "threshold", "strategy", "feature", "differs_at", "status",
 /// "seconds", "diagnosis", "diagnosis_text", "expected", "returned"}]}`. `rejection` is null or
 /// `{"code", "message"}` (with `line` and `column` for a character the lab does not accept); a case's
-/// `strategy` and `feature` are null except for matching_info, `threshold` is null for nn's None, and
+/// `strategy` and `feature` are null except for matching_info, `differs_at` (the first query feature whose
+/// list differs) is null except for a wrong dt / nn / nndr value, `threshold` is null for nn's None, and
 /// `diagnosis`, `expected` and `returned` are null for a correct case.
 pub fn report_json(m: &Marks) -> String {
     let mut s = String::new();
@@ -168,10 +169,14 @@ pub fn report_json(m: &Marks) -> String {
             Case::Info { strategy, feature, .. } => (format!("\"{}\"", strategy.name()), feature.to_string()),
             _ => ("null".into(), "null".into()),
         };
+        let differs_at = match &r.difference {
+            Some(Difference::Matches { feature, .. }) => feature.to_string(),
+            _ => "null".into(),
+        };
         let _ = write!(
             s,
             "{{\"task\": \"{}\", \"index\": {i}, \"frame\": {}, \"threshold\": {}, \"strategy\": {strategy}, \
-             \"feature\": {feature}, \"status\": \"{}\", \"seconds\": {:.3}, \"diagnosis\": ",
+             \"feature\": {feature}, \"differs_at\": {differs_at}, \"status\": \"{}\", \"seconds\": {:.3}, \"diagnosis\": ",
             r.case.task().name(),
             r.case.frame(),
             t.map_or("null".into(), |t| threshold_text(Some(t))),

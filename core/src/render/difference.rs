@@ -29,6 +29,9 @@ pub const EXTRA: Style = Style { color: VERMILLION, dash: &[8.0, 5.0], marker: M
 const WHITE: Rgb<u8> = Rgb([255, 255, 255]);
 /// Caption lines: 5x7 glyphs at scale 2, 6 px apart.
 const LINE: i64 = 20;
+/// A point on a frame or the canvas, in pixels.
+type Point = (f64, f64);
+
 /// How far past a frame's border a returned point may lie and still be drawn.
 const MARGIN: f64 = 20.0;
 
@@ -83,7 +86,7 @@ pub fn matches(
     let key =
         |kps: &[KeyPoint], i: i64| usize::try_from(i).ok().and_then(|i| kps.get(i)).map(|k| (k.x as f64, k.y as f64));
     // Reference first, the returned-only last: the student's extra lines on top.
-    let mut lines: Vec<((f64, f64), (f64, f64), Style)> = Vec::new();
+    let mut lines: Vec<(Point, Point, Style)> = Vec::new();
     let mut nowhere = 0;
     for (list, st) in shown.iter().zip([BOTH, MISSED, EXTRA]) {
         for &(q, t) in *list {
@@ -129,7 +132,7 @@ pub fn info(
     cur_image: &GrayImage,
     title: &str,
     expected: ((i64, i64), &[(i64, i64)]),
-    returned: Option<((f64, f64), &[(f64, f64)])>,
+    returned: Option<(Point, &[Point])>,
 ) -> RgbImage {
     let (pw, ph, cw, ch) = (prev_image.width(), prev_image.height(), cur_image.width(), cur_image.height());
     let mut legend = format!("blue circles: expected (the query and {} points)", expected.1.len());

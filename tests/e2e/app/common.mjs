@@ -179,3 +179,27 @@ export function cliTrajectory(args) {
   });
   return { ...out, svg: Buffer.from(out.svg, 'base64') };
 }
+
+// A small class marked by the CLI (`siftlab mark DIR --out OUT`, n = 2, seed 1: the good
+// file, three with a common mistake, one that does not compile) and its summary.json, for
+// the "Class results" view: the summary as JSON and a file holding it.
+export function classSummary() {
+  const fixtures = path.join(ROOT, 'tests/fixtures/mark');
+  const files = ['good', 'inverted', 'round', 'k100', 'syntax'];
+  const summary = cliCached(['class-summary', files, 2, 1], () => {
+    const work = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-e2e-class-'));
+    for (const f of files) {
+      fs.mkdirSync(path.join(work, 'class', f), { recursive: true });
+      fs.copyFileSync(path.join(fixtures, f, 'vision_tasks.py'), path.join(work, 'class', f, 'vision_tasks.py'));
+    }
+    const r = spawnSync(CLI, ['--opencv-lanes', String(LANES), '-d', DATASET, 'mark', path.join(work, 'class'),
+      '--out', path.join(work, 'out'), '-n', '2', '--seed', '1', '--jobs', '2'], { cwd: ROOT, encoding: 'utf8' });
+    if (!fs.existsSync(path.join(work, 'out', 'summary.json'))) throw new Error(`no summary.json: ${r.stderr}`);
+    const s = JSON.parse(fs.readFileSync(path.join(work, 'out', 'summary.json'), 'utf8'));
+    fs.rmSync(work, { recursive: true, force: true });
+    return s;
+  });
+  const file = path.join(fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-e2e-summary-')), 'summary.json');
+  fs.writeFileSync(file, JSON.stringify(summary));
+  return { summary, file };
+}

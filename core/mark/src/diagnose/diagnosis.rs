@@ -167,4 +167,84 @@ impl Diagnosis {
             Diagnosis::Differs(m) => m.clone(),
         }
     }
+
+    /// The kind of mistake a code names, in plain words and without any
+    /// one student's details (the class summary's explanation): `None`
+    /// for a code siftlab does not write.
+    pub fn explain_code(code: &str) -> Option<&'static str> {
+        Some(match code {
+            "less_or_equal" => "kept a match whose distance equals the threshold: the lab keeps distance < threshold",
+            "k_too_small" => {
+                "dt asked knnMatch for too few neighbours (k < len(des2)): matches under the threshold were lost"
+            }
+            "ratio_inverted" => "nndr compared the ratio the wrong way round (d2 / d1, or > instead of <)",
+            "nn_more_than_one" => "nn kept more than the nearest neighbour of a query",
+            "frames_swapped" => "des1 and des2 (or kp1 and kp2) swapped: the previous frame is the query",
+            "ratio_division" => {
+                "nndr tested d1 / d2 < t instead of d1 < t * d2: a different rounding in floating point"
+            }
+            "nn_ignores_threshold" => "nn ignored its threshold and kept every nearest neighbour",
+            "nn_ignores_none" => "nn with threshold None kept nothing: None means no threshold",
+            "empty_lists_dropped" => "left out the empty lists of queries without a match",
+            "wrong_length" => "returned another number of lists than query descriptors",
+            "not_float32" => "distances computed in float64, not knnMatch's float32",
+            "wrong_order" => "the right matches in another order than knnMatch's",
+            "rounded" => "matching_info rounded the coordinates; the lab truncates them with int()",
+            "float_coordinates" => "matching_info left the coordinates as floats",
+            "swapped_xy" => "matching_info gave (y, x) instead of (x, y)",
+            "empty_case" => "matching_info on an empty list of matches did not return ((0, 0), [], [])",
+            "wrong_shape" => "matching_info's value is not ((x, y), [(x, y), ...], [d, ...])",
+            "wrong_types_inside" => "matching_info's numbers are right, their types are not (lists, numpy values, ...)",
+            "wrong_type" => "returned a value of the wrong type (a runtime error)",
+            "runtime_error" => "raised an exception",
+            "timeout" => "ran over the time limit (an endless loop, or far too slow)",
+            "too_slow_here" => "ran over the browser's scaled limit: too slow to tell on that machine",
+            "task_time_limit" => "not run: the task's time was used up by the calls before it",
+            "crashed" => "the Python process ended during the call",
+            "differs" => "a value that differs in a way siftlab has no name for",
+            _ => return None,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every code a report can carry has its words in the class summary.
+    #[test]
+    fn every_code_is_explained() {
+        let all = [
+            Diagnosis::Mistake(Mistake::LessOrEqual),
+            Diagnosis::Mistake(Mistake::TruncatedK100),
+            Diagnosis::Mistake(Mistake::RatioInverted),
+            Diagnosis::Mistake(Mistake::NnMoreThanOne),
+            Diagnosis::Mistake(Mistake::WrongFrameOrder),
+            Diagnosis::TruncatedK(5),
+            Diagnosis::RatioDivision,
+            Diagnosis::NnIgnoresThreshold,
+            Diagnosis::NnNoneKeepsNothing,
+            Diagnosis::DroppedEmptyLists,
+            Diagnosis::Length { expected: 1, got: 2 },
+            Diagnosis::NotFloat32,
+            Diagnosis::Order,
+            Diagnosis::Rounded,
+            Diagnosis::FloatCoordinates,
+            Diagnosis::SwappedXY,
+            Diagnosis::EmptyCase(None),
+            Diagnosis::InfoShape(String::new()),
+            Diagnosis::InfoTypes,
+            Diagnosis::WrongType(String::new()),
+            Diagnosis::Runtime { message: String::new(), hint: None },
+            Diagnosis::Timeout { seconds: 1.0 },
+            Diagnosis::TooSlowHere { limit: 1.0, speed: 1.0 },
+            Diagnosis::TaskTimeLimit { seconds: 1.0 },
+            Diagnosis::Crashed(String::new()),
+            Diagnosis::Differs(String::new()),
+        ];
+        for d in &all {
+            assert!(Diagnosis::explain_code(d.code()).is_some_and(|t| !t.is_empty()), "{}", d.code());
+        }
+        assert_eq!(Diagnosis::explain_code("<b>"), None);
+    }
 }

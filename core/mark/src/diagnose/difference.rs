@@ -13,6 +13,9 @@ use std::collections::HashSet;
 /// Matches (or points) of one list kept for the picture.
 pub const MAX_SHOWN: usize = 64;
 
+/// A returned point (x, y), as Python numbers.
+pub type Point = (f64, f64);
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum Difference {
     /// The first list (query feature `feature`) that differs, as the
@@ -22,7 +25,7 @@ pub enum Difference {
     Matches { feature: usize, both: Vec<DMatch>, missed: Vec<DMatch>, extra: Vec<Got>, counts: (usize, usize, usize) },
     /// matching_info's reference tuple and the returned points, where the
     /// value had the tuple's shape (`None` otherwise).
-    Info { expected: MatchInfo, returned: Option<((f64, f64), Vec<(f64, f64)>)> },
+    Info { expected: MatchInfo, returned: Option<(Point, Vec<Point>)> },
 }
 
 impl Difference {
