@@ -13,6 +13,7 @@ import fs from 'node:fs';
 import path from 'node:path';
 import { chromium } from 'playwright-core';
 import { serve, ROOT } from './harness.mjs';
+import { classSummary } from './app/common.mjs';
 
 let browser;
 let server;
@@ -105,4 +106,33 @@ test('input before the data arrives: an early FRAME_ID stays, an early check wai
   assert.equal(await page.$(tid('check-pending')), null, 'still pending after the verdict');
   await context.close();
   assert.deepEqual(errors, []);
+});
+
+test('summary.html from disk with the network off: renders the summary, no request, no console error', async () => {
+  const { summary, html } = classSummary();
+  const context = await browser.newContext({ viewport: { width: 1400, height: 900 }, offline: true });
+  const requests = [];
+  const errors = [];
+  context.on('request', (r) => { if (!r.url().startsWith('file:')) requests.push(r.url()); });
+  const page = await context.newPage();
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  page.on('pageerror', (e) => errors.push(String(e)));
+  await page.goto(`file://${html}`);
+  assert.equal(await page.locator('table.mistakes tbody tr').count(), summary.mistakes.length);
+  const codes = await page.locator('table.mistakes tbody tr td:first-child code').allTextContents();
+  assert.deepEqual(codes, summary.mistakes.map((m) => m.code));
+  assert.equal(await page.locator('svg.hist').count(), 1 + summary.tasks.length);
+  // The links point at the app with each case's own query.
+  const hrefs = await page.locator('a.case').evaluateAll((as) => as.map((a) => a.getAttribute('data-q')));
+  assert.ok(hrefs.length > 0 && hrefs.every((q) => q.startsWith('?src=demo&frame=')), JSON.stringify(hrefs));
+  fs.mkdirSync(path.join(ROOT, 'tests/e2e/screenshots/chromium'), { recursive: true });
+  for (const width of [1400, 390]) {
+    await page.setViewportSize({ width, height: 900 });
+    const over = await page.evaluate(() => document.documentElement.scrollWidth - document.documentElement.clientWidth);
+    assert.ok(over <= 0, `summary.html at ${width} px scrolls sideways by ${over} px`);
+    await page.screenshot({ path: path.join(ROOT, `tests/e2e/screenshots/chromium/summary-html-${width}.png`), fullPage: true });
+  }
+  assert.deepEqual(requests, []);
+  assert.deepEqual(errors, []);
+  await context.close();
 });

@@ -263,7 +263,7 @@ pub fn html(s: &Json) -> String {
     if mistakes.is_empty() {
         b.push_str("<p>No wrong value: every failed case (if any) was a refusal.</p>");
     } else {
-        b.push_str("<table class=\"mistakes\"><thead><tr><th scope=\"col\">mistake</th><th scope=\"col\">students</th><th scope=\"col\">cases</th><th scope=\"col\">examples (open in siftlab)</th></tr></thead><tbody>");
+        b.push_str("<div class=\"scroll\" tabindex=\"0\" role=\"region\" aria-label=\"the mistakes\"><table class=\"mistakes\"><thead><tr><th scope=\"col\">mistake</th><th scope=\"col\">students</th><th scope=\"col\">cases</th><th scope=\"col\">examples (open in siftlab)</th></tr></thead><tbody>");
         for m in mistakes {
             let examples: Vec<String> = m
                 .get("examples")
@@ -288,7 +288,7 @@ pub fn html(s: &Json) -> String {
                 examples.join("")
             ));
         }
-        b.push_str("</tbody></table>");
+        b.push_str("</tbody></table></div>");
     }
     b.push_str("</section>\n");
     // Hardest cases.
@@ -320,7 +320,7 @@ text-align:left;vertical-align:top}.mistakes td:first-child{max-width:30rem}ul{m
 .hist{width:100%;max-width:760px;height:auto}.hist .n,.hist .l{font-size:11px;fill:#1a1a1a}\
 .tasks{display:grid;grid-template-columns:repeat(auto-fit,minmax(300px,1fr));gap:1rem}figure{margin:0}\
 figcaption{font-weight:600}input{max-width:90%}a{color:#0060a0}.facts{color:#333}code{overflow-wrap:anywhere}\
-@media (max-width:600px){th,td{padding:.2rem .3rem;font-size:14px}}";
+td{overflow-wrap:anywhere}.scroll{overflow-x:auto}@media (max-width:600px){th,td{padding:.2rem .3rem;font-size:14px}}";
 
 /// Points the explorer links at the address typed in the page.
 const SCRIPT: &str = "document.getElementById('app').addEventListener('change',function(e){\

@@ -181,8 +181,8 @@ export function cliTrajectory(args) {
 }
 
 // A small class marked by the CLI (`siftlab mark DIR --out OUT`, n = 2, seed 1: the good
-// file, three with a common mistake, one that does not compile) and its summary.json, for
-// the "Class results" view: the summary as JSON and a file holding it.
+// file, three with a common mistake, one that does not compile): its summary as JSON, and
+// files holding summary.json and summary.html (for the "Class results" view and the page).
 export function classSummary() {
   const fixtures = path.join(ROOT, 'tests/fixtures/mark');
   const files = ['good', 'inverted', 'round', 'k100', 'syntax'];
@@ -196,10 +196,13 @@ export function classSummary() {
       '--out', path.join(work, 'out'), '-n', '2', '--seed', '1', '--jobs', '2'], { cwd: ROOT, encoding: 'utf8' });
     if (!fs.existsSync(path.join(work, 'out', 'summary.json'))) throw new Error(`no summary.json: ${r.stderr}`);
     const s = JSON.parse(fs.readFileSync(path.join(work, 'out', 'summary.json'), 'utf8'));
+    const html = fs.readFileSync(path.join(work, 'out', 'summary.html'), 'utf8');
     fs.rmSync(work, { recursive: true, force: true });
-    return s;
+    return { s, html };
   });
-  const file = path.join(fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-e2e-summary-')), 'summary.json');
-  fs.writeFileSync(file, JSON.stringify(summary));
-  return { summary, file };
+  const dir = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-e2e-summary-'));
+  const file = path.join(dir, 'summary.json');
+  fs.writeFileSync(file, JSON.stringify(summary.s));
+  fs.writeFileSync(path.join(dir, 'summary.html'), summary.html);
+  return { summary: summary.s, file, html: path.join(dir, 'summary.html') };
 }
