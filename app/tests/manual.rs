@@ -60,7 +60,7 @@ async fn the_manual_examples_through_the_app() {
     // The model: every example's tuple is the manual's.
     for ex in &EXAMPLES {
         let f = ex.frame as u32;
-        let t = siftlab_app::model::lab_manual::threshold_text(ex);
+        let t = siftlab_app::model::lab_manual::example_threshold_box(ex);
         let kind = siftlab_app::model::lab_manual::example_kind(ex).unwrap();
         let a = analyse(&frames[&(f - 1)], &frames[&f], parse_strategy(kind, &t).unwrap(), &ex.feature.to_string())
             .unwrap();

@@ -124,19 +124,6 @@ impl GrayImage {
         };
         GrayImage { width: w, height: h, data }
     }
-
-    /// Converts interleaved RGBA (as a browser canvas gives it) to gray.
-    pub fn from_rgba(width: usize, height: usize, rgba: &[u8]) -> Result<Self> {
-        if width.checked_mul(height).and_then(|n| n.checked_mul(4)) != Some(rgba.len()) {
-            return Err(Error::InvalidArgument(format!(
-                "RGBA buffer has {} bytes but {width}x{height} needs {}",
-                rgba.len(),
-                width.saturating_mul(height).saturating_mul(4)
-            )));
-        }
-        let data = rgba.chunks_exact(4).map(|p| bgr_to_gray(p[2], p[1], p[0])).collect();
-        Ok(GrayImage { width, height, data })
-    }
 }
 
 /// OpenCV's `cvtColor(BGR2GRAY)` for 8-bit: the 0.114/0.587/0.299 weights in

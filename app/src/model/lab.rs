@@ -2,7 +2,7 @@
 //! core derives from them. Everything the user sees is a function of this.
 
 use crate::model::frame::Frame;
-use crate::model::parse::{parse_feature, parse_strategy, threshold_text};
+use crate::model::parse::{parse_feature, parse_strategy, threshold_box_text};
 use leptos::prelude::*;
 use siftlab_core::matching::StrategyKind;
 use siftlab_core::matching::{explain, Explanation, Strategy};
@@ -84,7 +84,7 @@ impl PartialEq for Analysis {
 
 /// The default threshold text shown when a strategy is picked first.
 pub fn default_threshold(kind: StrategyKind) -> String {
-    threshold_text(siftlab_core::matching::args::matching_default(kind))
+    threshold_box_text(siftlab_core::matching::args::matching_default(kind))
 }
 
 /// The threshold's range as the controls hint it.

@@ -11,7 +11,7 @@ use siftlab_core::matching::StrategyKind;
 
 /// The threshold box's text for an example, as the manual writes `-t`
 /// (`100`, `0.97`; empty for `nn` without one).
-pub fn threshold_text(ex: &ManualExample) -> String {
+pub fn example_threshold_box(ex: &ManualExample) -> String {
     ex.threshold.map(|t| t.to_string()).unwrap_or_default()
 }
 
@@ -82,7 +82,7 @@ mod tests {
     #[test]
     fn every_example_is_found_from_its_own_settings() {
         for (i, ex) in EXAMPLES.iter().enumerate() {
-            let t = threshold_text(ex);
+            let t = example_threshold_box(ex);
             let kind = example_kind(ex).unwrap();
             assert_eq!(example_for(ex.frame as u32, kind, &t, &ex.feature.to_string()), Some(i), "{}", ex.command());
             // What the box shows is what the manual's command line says after -t.

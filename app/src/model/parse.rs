@@ -22,7 +22,7 @@ pub fn parse_feature(text: &str) -> Result<usize, String> {
 }
 
 /// A default threshold as the threshold box shows it (none: empty).
-pub fn threshold_text(t: Option<f64>) -> String {
+pub fn threshold_box_text(t: Option<f64>) -> String {
     t.map_or(String::new(), |t| t.to_string())
 }
 

@@ -11,7 +11,6 @@ use crate::model::lab::Source;
 use crate::protocol::mark::set_pair;
 use crate::protocol::mark::MARK_WORKER_NAME;
 use siftlab_mark::{check_source, Limits, Marks, Outcome, Pair, Pairs, Session, Step};
-use std::cell::Cell;
 use std::cell::RefCell;
 use std::collections::HashMap;
 use std::rc::Rc;
@@ -250,16 +249,6 @@ fn blob_url() -> Result<String, Failure> {
         .map_err(|e| Failure::Crashed(format!("cannot build the worker's URL: {}", js_err(e))))
 }
 
-thread_local! {
-    /// How long the last start of Python took, in ms.
-    static LAST_START_MS: Cell<f64> = const { Cell::new(0.0) };
-}
-
-/// How long the last start of Python took, in ms (shown with the report).
-pub fn last_start_ms() -> f64 {
-    LAST_START_MS.with(Cell::get)
-}
-
 /// What a marking reports besides the marks.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Timing {
@@ -354,7 +343,6 @@ pub async fn run(
                 if timing.start_ms == 0.0 {
                     timing.start_ms = ms;
                 }
-                LAST_START_MS.with(|c| c.set(ms));
                 // Measured at every start: a machine that got busy since
                 // gets longer limits for the re-run.
                 session.measured(reference / REFERENCE_NOMINAL_MS);

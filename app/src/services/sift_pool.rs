@@ -212,12 +212,6 @@ pub fn cached(bytes: &[u8], lanes: usize) -> Option<SiftResult> {
     POOL.with(|p| p.borrow_mut().cache_get(key)).filter(has_gray)
 }
 
-/// Stores a result computed elsewhere (tests, or a frame analysed in-process).
-pub fn insert_cache(bytes: &[u8], lanes: usize, r: SiftResult) {
-    let key = content_key(bytes, lanes);
-    POOL.with(|p| p.borrow_mut().cache_put(key, r));
-}
-
 /// Whether `r` can be drawn: an odometry frame's result is cached without
 /// its gray image (0.47 MB per KITTI frame), and the page has no image
 /// decoder of its own (it stays small), so such a hit goes to a worker again.

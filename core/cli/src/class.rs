@@ -11,10 +11,11 @@
 //! grades.csv at the end, a row for every entry found (refusals included).
 
 use crate::args::{Cli, MarkArgs};
-use crate::mark::{frame_ids, frame_pairs, Runner};
-use crate::report_files::{atomic_write, gradescope_json, Row, Status};
+use crate::mark::{frame_ids, frame_pairs};
+use crate::report_files::{atomic_write, gradescope_json, student_dir, Row, Status};
 use crate::seal::{check_apart, Seal, SEAL_FILE};
 use crate::submissions::{checked, discover, read_submission, Entry, Student};
+use crate::transport::Runner;
 use siftlab_core::error::{Error, Result};
 use siftlab_mark::{escaped, parse_json, plan, report_json, report_text, Json, Marks, Pair, MAX_SOURCE_BYTES};
 use std::collections::BTreeMap;
@@ -41,12 +42,6 @@ struct RunKey {
     n: usize,
     dataset: String,
     frames: Vec<u32>,
-}
-
-/// The folder of student `id`'s files in `out`: under students/, so no id
-/// (`grades.csv` from a file grades.csv.py) names a class-level file.
-pub fn student_dir(out: &Path, id: &str) -> std::path::PathBuf {
-    out.join("students").join(id)
 }
 
 /// `siftlab mark SUBMISSIONS... --out DIR`: exit 0 when every entry is

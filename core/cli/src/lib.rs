@@ -25,6 +25,7 @@ mod seccomp;
 mod submissions;
 mod summary;
 pub mod trajectory;
+mod transport;
 pub mod visual;
 mod zip;
 
@@ -57,24 +58,8 @@ pub fn main() -> i32 {
             }
         }
     }
-    // mark's exit status says whether the file got full marks.
-    if let Command::Mark(a) = &cli.command {
-        // One file, a class (--out), the join of shards (--merge) or a summary.
-        if a.summary {
-            return summary::main(&a.files, a.out.as_deref());
-        }
-        return match (&a.out, a.merge) {
-            (Some(out), true) => class::merge(a, out),
-            (None, true) => {
-                eprintln!("siftlab: error: --merge needs --out DIR, the folder for the joined grades.csv");
-                2
-            }
-            (Some(out), false) => class::run(&cli, a, out),
-            (None, false) => mark::main(&cli, a),
-        };
-    }
     match run(&cli) {
-        Ok(()) => 0,
+        Ok(code) => code,
         Err(e) => {
             eprintln!("siftlab: error: {e}");
             1
@@ -82,8 +67,10 @@ pub fn main() -> i32 {
     }
 }
 
-pub fn run(cli: &Cli) -> Result<()> {
-    match &cli.command {
+/// Runs one command; its exit status (mark's says whether the file got
+/// full marks; the others 0), or the error to print (status 1).
+fn run(cli: &Cli) -> Result<i32> {
+    let done: Result<()> = match &cli.command {
         Command::GetInfo(a) => {
             let (info, _) = run_match(cli, a, "get_info")?;
             let mut out = std::io::stdout().lock();
@@ -166,8 +153,26 @@ pub fn run(cli: &Cli) -> Result<()> {
         Command::Sift(a) => run_sift(cli, a),
         Command::Anatomy(a) => anatomy::run(&a.image, &sift_params(cli), a.json, a.out.as_deref()),
         Command::MatchAll(a) => match_all::run(cli, a),
-        Command::Mark(a) => mark::run(cli, a).map(|_| ()),
+        Command::Mark(a) => return Ok(mark_command(cli, a)),
         Command::Autograder(a) => autograder::run(cli, a),
+    };
+    done.map(|()| 0)
+}
+
+/// `mark`: one file, a class (--out), the join of shards (--merge) or a
+/// summary; its exit status (docs/marking.md).
+fn mark_command(cli: &Cli, a: &MarkArgs) -> i32 {
+    if a.summary {
+        return summary::main(&a.files, a.out.as_deref());
+    }
+    match (&a.out, a.merge) {
+        (Some(out), true) => class::merge(a, out),
+        (None, true) => {
+            eprintln!("siftlab: error: --merge needs --out DIR, the folder for the joined grades.csv");
+            2
+        }
+        (Some(out), false) => class::run(cli, a, out),
+        (None, false) => mark::main(cli, a),
     }
 }
 

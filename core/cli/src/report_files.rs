@@ -50,6 +50,12 @@ pub fn zero_reason(r: &Rejection) -> String {
     }
 }
 
+/// The folder of student `id`'s files in `out`: under students/, so no id
+/// (`grades.csv` from a file grades.csv.py) names a class-level file.
+pub fn student_dir(out: &Path, id: &str) -> std::path::PathBuf {
+    out.join("students").join(id)
+}
+
 /// One line of grades.csv.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Row {

@@ -448,72 +448,41 @@ fn shared_libraries(files: &[PathBuf]) -> Vec<PathBuf> {
     libs
 }
 
-/// CPU seconds and resident bytes of a process and all its descendants
-/// (what they have used so far, reaped children included).
-pub fn tree_usage(pid: u32) -> Option<(f64, u64)> {
-    // SAFETY: sysconf has no preconditions.
-    let (tick, page) = unsafe { (libc::sysconf(libc::_SC_CLK_TCK) as f64, libc::sysconf(libc::_SC_PAGESIZE) as u64) };
-    let mut stack = vec![pid];
-    let (mut ticks, mut rss, mut seen) = (0u64, 0u64, 0usize);
-    while let Some(p) = stack.pop() {
-        seen += 1;
-        if seen > 10_000 {
-            break;
+/// The strongest sandbox that works here: bubblewrap; where it cannot
+/// make namespaces (a container) and siftlab runs as root, the container
+/// tier. `SIFTLAB_SANDBOX=container` picks the container tier (as the
+/// platforms' simulations and tests do on a machine with bubblewrap).
+pub(crate) fn pick_tier(python: &Python, dir: &std::path::Path) -> Result<Tier> {
+    #[cfg(not(target_os = "linux"))]
+    return Err(Error::InvalidArgument(
+        "no sandbox on this system (siftlab mark sandboxes with bubblewrap, on Linux): \
+         pass --no-sandbox to check your own file with your own rights"
+            .into(),
+    ));
+    let forced = std::env::var("SIFTLAB_SANDBOX").ok();
+    let bwrap = match forced.as_deref() {
+        Some("container") => Err("SIFTLAB_SANDBOX=container".to_string()),
+        Some("bubblewrap") | None => check(python, dir, Tier::Bubblewrap),
+        Some(other) => {
+            return Err(Error::InvalidArgument(format!(
+                "SIFTLAB_SANDBOX={}: use bubblewrap or container (or unset it: the strongest that works)",
+                siftlab_mark::escaped(other, 40)
+            )))
         }
-        let Ok(stat) = std::fs::read_to_string(format!("/proc/{p}/stat")) else { continue };
-        // Fields after the command name, which may hold spaces and ')'.
-        let Some(rest) = stat.rfind(')').map(|i| &stat[i + 2..]) else { continue };
-        let f: Vec<&str> = rest.split_whitespace().collect();
-        // utime, stime, cutime, cstime are fields 14–17 of stat (11–14 here); rss is 24 (21).
-        let n = |i: usize| f.get(i).and_then(|x| x.parse::<u64>().ok()).unwrap_or(0);
-        ticks += n(11) + n(12) + n(13) + n(14);
-        rss += n(21) * page;
-        stack.extend(children(p));
+    };
+    let Err(why) = bwrap else { return Ok(Tier::Bubblewrap) };
+    if forced.as_deref() != Some("bubblewrap") && crate::container::possible() {
+        return match check(python, dir, Tier::Container) {
+            Ok(()) => Ok(Tier::Container),
+            Err(e) => Err(Error::InvalidArgument(format!(
+                "no usable sandbox here: bubblewrap: {why}; the container tier: {e}. Pass --no-sandbox only \
+                 to check your own file"
+            ))),
+        };
     }
-    (seen > 0).then_some((ticks as f64 / tick, rss))
-}
-
-/// The direct children of `pid`, over all its threads.
-pub fn children(pid: u32) -> Vec<u32> {
-    let mut out = Vec::new();
-    if let Ok(tasks) = std::fs::read_dir(format!("/proc/{pid}/task")) {
-        for t in tasks.flatten() {
-            if let Ok(c) = std::fs::read_to_string(t.path().join("children")) {
-                out.extend(c.split_whitespace().filter_map(|x| x.parse::<u32>().ok()));
-            }
-        }
-    }
-    out
-}
-
-/// SIGKILL to `pid`, its process group and every descendant.
-pub fn kill_tree(pid: u32) {
-    let mut all = vec![pid];
-    let mut i = 0;
-    while i < all.len() && all.len() < 10_000 {
-        let c = children(all[i]);
-        all.extend(c);
-        i += 1;
-    }
-    for p in all.iter().rev() {
-        // SAFETY: kill has no memory preconditions; a pid that ended is ESRCH.
-        unsafe {
-            libc::kill(*p as libc::pid_t, libc::SIGKILL);
-        }
-    }
-    // SAFETY: as above; the group is the one setsid made for the child.
-    unsafe {
-        libc::kill(-(pid as libc::pid_t), libc::SIGKILL);
-    }
-}
-
-/// CPU seconds the calling thread has used (the knn answers siftlab
-/// computes count towards the call, as OpenCV's knnMatch counts in the lab).
-pub fn thread_cpu() -> f64 {
-    let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
-    // SAFETY: ts is a valid timespec to write.
-    unsafe {
-        libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts);
-    }
-    ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+    Err(Error::InvalidArgument(format!(
+        "no usable sandbox here ({why}): siftlab mark runs student files in bubblewrap (apt install \
+         bubblewrap; user namespaces must be allowed) or, as root inside a container (Gradescope, \
+         PrairieLearn), as a uid of their own. Pass --no-sandbox only to check your own file"
+    )))
 }

@@ -5,8 +5,7 @@
 //! `siftlab mark --summary DIR...` from the class folders' grades.csv and
 //! sealed report.json files.
 
-use crate::class::student_dir;
-use crate::report_files::{atomic_write, Row};
+use crate::report_files::{atomic_write, student_dir, Row};
 use crate::seal::{Seal, KEY_FILE};
 use siftlab_core::error::{Error, Result};
 use siftlab_core::render::palette::{hex, BLUE, REST};

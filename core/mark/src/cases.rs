@@ -98,17 +98,17 @@ impl Case {
             Case::Info { strategy, feature, .. } => format!(
                 "matching_info(kp1, kp2, matches) on {pair}, matches = {}({}) of feature {feature}",
                 strategy.name(),
-                threshold_text(strategy.threshold())
+                py_threshold(strategy.threshold())
             ),
             _ => {
-                format!("{}(des1, des2, {}) on {pair}", self.task().name(), threshold_text(self.strategy().threshold()))
+                format!("{}(des1, des2, {}) on {pair}", self.task().name(), py_threshold(self.strategy().threshold()))
             }
         }
     }
 }
 
-/// A threshold as Python prints the argument: `232.5`, `None`.
-pub fn threshold_text(t: Option<f64>) -> String {
+/// A threshold argument as Python prints it: `232.5`, `None`.
+pub fn py_threshold(t: Option<f64>) -> String {
     t.map_or("None".to_string(), py_float)
 }
 

@@ -2,7 +2,7 @@
 //! wrong type or time-out) plus 4.5 × the share of correct values, 5 per
 //! task, 20 in all; and the report, as text and as JSON.
 
-use crate::cases::{threshold_text, Case, Task};
+use crate::cases::{py_threshold, Case, Task};
 use crate::diagnose::{CaseResult, Difference, Status};
 use crate::source::Rejection;
 use siftlab_core::json::{push_f64, push_str};
@@ -179,7 +179,7 @@ pub fn report_json(m: &Marks) -> String {
              \"feature\": {feature}, \"differs_at\": {differs_at}, \"status\": \"{}\", \"seconds\": {:.3}, \"diagnosis\": ",
             r.case.task().name(),
             r.case.frame(),
-            t.map_or("null".into(), |t| threshold_text(Some(t))),
+            t.map_or("null".into(), |t| py_threshold(Some(t))),
             r.status.name(),
             r.seconds
         );

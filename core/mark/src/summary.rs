@@ -70,7 +70,7 @@ fn link(frame: i64, feature: Option<i64>, algo: &str, threshold: Option<f64>) ->
     let feature = feature.filter(|f| (0..NUM_FEATURES as i64).contains(f)).unwrap_or(0);
     let mut link = format!("?src=demo&frame={frame}&feature={feature}&algo={algo}");
     if let Some(t) = threshold.filter(|t| t.is_finite()) {
-        link.push_str(&format!("&t={}", crate::cases::threshold_text(Some(t))));
+        link.push_str(&format!("&t={}", crate::cases::py_threshold(Some(t))));
     }
     link
 }
@@ -81,7 +81,7 @@ fn case_words(case: &Json) -> String {
     let index = case.get("index").and_then(Json::as_i64).unwrap_or(-1);
     let frame = case.get("frame").and_then(Json::as_i64).unwrap_or(0);
     let t = case.get("threshold").and_then(Json::as_f64);
-    let t = crate::cases::threshold_text(t.filter(|t| t.is_finite()));
+    let t = crate::cases::py_threshold(t.filter(|t| t.is_finite()));
     match (task, case.get("strategy").and_then(Json::as_str), case.get("feature").and_then(Json::as_i64)) {
         ("matching_info", Some(s), Some(f)) => {
             format!("matching_info #{index}, frames {} -> {frame}, {s}({t}) of feature {f}", frame - 1)

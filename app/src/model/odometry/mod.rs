@@ -5,7 +5,7 @@
 
 pub mod frame;
 
-use crate::model::parse::{parse_strategy, threshold_text};
+use crate::model::parse::{parse_strategy, threshold_box_text};
 pub use crate::protocol::odometry::Tracker;
 use siftlab_core::matching::{args, Strategy, StrategyKind};
 use siftlab_core::render::plot::axes::nearest_xz;
@@ -32,7 +32,7 @@ pub fn tracker_label(kind: Option<StrategyKind>) -> String {
 
 /// The threshold a strategy starts with in the menu (the README's figures).
 pub fn default_threshold(kind: StrategyKind) -> String {
-    threshold_text(args::odometry_default(kind))
+    threshold_box_text(args::odometry_default(kind))
 }
 
 /// The tracker the controls describe, parsed once: LK, or the strategy with

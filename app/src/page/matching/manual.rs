@@ -6,7 +6,7 @@
 
 use crate::model::frameset::has_pair;
 use crate::model::lab::{Lab, Source, Which};
-use crate::model::lab_manual::{example_for, example_kind, threshold_text, verdict};
+use crate::model::lab_manual::{example_for, example_kind, example_threshold_box, verdict};
 use crate::model::parse::parse_feature;
 use crate::services::loading::{self, frame_path};
 use leptos::prelude::*;
@@ -30,7 +30,7 @@ pub fn apply_example(lab: Lab, i: usize) {
         lab.algo.set(k);
     }
     // After the strategy: the threshold box is per strategy.
-    lab.set_threshold(threshold_text(ex));
+    lab.set_threshold(example_threshold_box(ex));
     lab.set_feature(ex.feature);
     let f = ex.frame as u32;
     if lab.source.with_untracked(|s| has_pair(s.frames(), f)) {
