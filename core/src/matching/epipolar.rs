@@ -1,7 +1,7 @@
 //! Judging matches by the true geometry: the fundamental matrix between two
 //! frames from their ground-truth poses, and each match's Sampson distance
 //! to it. Nothing here must equal OpenCV bit for bit, so it uses `nalgebra`
-//! in f64 (docs/architecture.md, "Linear algebra").
+//! in f64 (docs/architecture.md, `core/`: nalgebra only where no OpenCV bits are at stake).
 //!
 //! With camera-to-world poses P_prev, P_cur (KITTI's `poses/00.txt`),
 //! [R|t] = P_cur⁻¹·P_prev maps the previous camera's coordinates into the
