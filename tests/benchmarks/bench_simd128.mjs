@@ -1,7 +1,7 @@
 // SIFT per frame in the app's two worker builds, two builds of the site interleaved in one
 // run (docs/performance.md, "The SIMD128 path"): for each demo frame 0-5, one SIFT in every
 // page in turn, each page kept open (warm) and fed one frame at a time, as
-// tests/e2e/bench.mjs does (each round on freshly loaded pages: a page keeps the SIFT of a
+// tests/benchmarks/bench.mjs does (each round on freshly loaded pages: a page keeps the SIFT of a
 // frame it has seen). Medians per page, and the portable/relaxed ratio per site.
 //   node tests/benchmarks/bench_simd128.mjs --a /tmp/dist-before --b dist [--engine chromium|webkit] [--rounds 1]
 // Chromium (playwright-core) opens four pages: each site with the relaxed-SIMD worker and
@@ -9,6 +9,7 @@
 // sessions, one per site. Prints JSON.
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { launchChromium } from '../e2e/harness.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const E2E = path.join(ROOT, 'tests/e2e');
@@ -31,10 +32,7 @@ const pages = {};
 const closers = [];
 if (engine === 'chromium') {
   const { chromium } = await import(path.join(E2E, 'node_modules/playwright-core/index.mjs'));
-  const browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run', '--disable-component-update', '--disable-sync'],
-  });
+  const browser = await launchChromium();
   closers.push(() => browser.close());
   for (const k of Object.keys(sites)) {
     for (const [build, q] of [['relaxed', ''], ['portable', '&wasm=portable']]) {

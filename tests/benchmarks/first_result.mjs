@@ -11,8 +11,8 @@ import { createRequire } from 'node:module';
 import fs from 'node:fs';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import { ROOT, CHROMIUM_ARGS } from './vo_memory.mjs';
-import { serve } from '../e2e/harness.mjs';
+import { ROOT } from './vo_memory.mjs';
+import { serve, launchChromium } from '../e2e/harness.mjs';
 
 const require = createRequire(path.join(ROOT, 'tests/e2e/package.json'));
 const { chromium } = require('playwright-core');
@@ -29,7 +29,7 @@ const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 const gz = (f) => zlib.gzipSync(fs.readFileSync(f), { level: 9 }).length;
 
 async function once(base) {
-  const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium', args: CHROMIUM_ARGS });
+  const browser = await launchChromium();
   try {
     const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });
     const t0 = Date.now();

@@ -4,7 +4,7 @@
 #   2. the odometry against the lab's OpenCV loop, same rounds (compare_vo.py: ATE, the
 #      frame-by-frame difference, frames/s ratio);
 #   3. SIFT speed against OpenCV single-thread, interleaved (bench_interleaved.py);
-#   4. the app in headless Chromium, both wasm builds (tests/e2e/bench.mjs), if dist/ is
+#   4. the app in headless Chromium, both wasm builds (tests/benchmarks/bench.mjs), if dist/ is
 #      served at $BASE_URL (default http://127.0.0.1:8080/; start it with www/serve).
 #
 #   tests/benchmarks/measure_all.sh [--dataset DIR] [--frames N] [--no-browser]
@@ -50,7 +50,7 @@ if [ "$BROWSER" = 1 ]; then
     BASE_URL="${BASE_URL:-http://127.0.0.1:8080/}"
     if curl -sf -o /dev/null "$BASE_URL"; then
         echo "== 4/4 the app in Chromium (bench.mjs)" >&2
-        (cd tests/e2e && BASE_URL="$BASE_URL" node bench.mjs --vo-rounds 1 --vo-dataset "$DATASET" ${FRAMES:+--vo-frames "$FRAMES"}) > "$OUT/chromium.json"
+        (BASE_URL="$BASE_URL" node tests/benchmarks/bench.mjs --vo-rounds 1 --vo-dataset "$DATASET" ${FRAMES:+--vo-frames "$FRAMES"}) > "$OUT/chromium.json"
     else
         echo "== 4/4 skipped: nothing served at $BASE_URL (run www/serve, or pass --no-browser)" >&2
     fi

@@ -11,6 +11,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { CHROMIUM_ARGS } from '../e2e/harness.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const { default: WebSocket } = await import(path.join(ROOT, 'tests/e2e/node_modules/ws/index.js'));
@@ -22,8 +23,7 @@ const top = topArg > 0 ? Number(process.argv[topArg + 1]) : 25;
 const profileDir = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-profile-'));
 const port = 9300 + Math.floor(Math.random() * 500);
 const chrome = spawn(process.env.CHROMIUM || '/usr/bin/chromium', [
-  '--headless', '--no-sandbox', '--disable-gpu', '--no-first-run', '--disable-background-networking',
-  '--disable-component-update', '--disable-sync', `--remote-debugging-port=${port}`, `--user-data-dir=${profileDir}`, 'about:blank',
+  ...CHROMIUM_ARGS, `--remote-debugging-port=${port}`, `--user-data-dir=${profileDir}`, 'about:blank',
 ], { stdio: 'ignore' });
 let version;
 for (let i = 0; !version; i++) {

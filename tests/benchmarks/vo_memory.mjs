@@ -25,7 +25,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
-import { serve } from '../e2e/harness.mjs';
+import { serve, launchChromium } from '../e2e/harness.mjs';
 
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const require = createRequire(path.join(ROOT, 'tests/e2e/package.json'));
@@ -33,8 +33,6 @@ const tid = (id) => `[data-testid="${id}"]`;
 const MB = 1024 * 1024;
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
-export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-  '--disable-component-update', '--disable-sync', '--disable-quic'];
 
 /** OpenCV's SIMD width on this CPU, as the CLI picks it by default (tests/e2e/app/common.mjs). */
 export function hostLanes() {
@@ -285,7 +283,7 @@ async function main() {
   const ram = memTotalBytes();
   const { chromium } = require('playwright-core');
   const server = await serve(a.dist, { hooks: false });
-  const browser = await chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium', args: CHROMIUM_ARGS });
+  const browser = await launchChromium();
   let rec;
   try {
     const context = await browser.newContext({ viewport: { width: 1400, height: 900 } });

@@ -11,8 +11,7 @@ import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import path from 'node:path';
-import { chromium } from 'playwright-core';
-import { serve, ROOT } from './harness.mjs';
+import { serve, ROOT, launchChromium } from './harness.mjs';
 import { classSummary } from './app/common.mjs';
 
 let browser;
@@ -21,11 +20,7 @@ let server;
 before(async () => {
   // Served as the real site is (no test hooks in index.html): the hooks are the suite's.
   server = await serve(path.join(ROOT, 'dist'), { hooks: false });
-  browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-      '--disable-component-update', '--disable-sync', '--disable-quic'],
-  });
+  browser = await launchChromium();
 });
 after(async () => {
   await browser?.close();

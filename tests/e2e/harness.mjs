@@ -82,9 +82,17 @@ const which = (cands) => cands.find((c) => fs.existsSync(c));
 const GECKODRIVER = () => which([process.env.GECKODRIVER, path.join(os.homedir(), '.cargo/bin/geckodriver'), '/usr/local/bin/geckodriver', '/usr/bin/geckodriver'].filter(Boolean));
 const MINIBROWSER = () => which([process.env.MINIBROWSER, '/usr/lib/x86_64-linux-gnu/webkit2gtk-4.1/MiniBrowser', '/usr/lib/aarch64-linux-gnu/webkit2gtk-4.1/MiniBrowser', '/usr/libexec/webkit2gtk-4.1/MiniBrowser'].filter(Boolean));
 
-// The flags keep Chromium off this closed network (it would try Google's hosts).
-const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
+// The flags keep Chromium off this closed network (it would try Google's hosts): every
+// script that starts Chromium starts it with these (WebDriver here, Playwright through
+// launchChromium), so none drifts.
+export const CHROMIUM_ARGS = ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
   '--disable-component-update', '--disable-sync', '--disable-quic'];
+
+/** Debian's Chromium (or $CHROMIUM) under Playwright, with CHROMIUM_ARGS and `extra`. */
+export async function launchChromium(extra = []) {
+  const { chromium } = await import('playwright-core');
+  return chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium', args: [...CHROMIUM_ARGS, ...extra] });
+}
 
 export const ENGINES = {
   chromium: {

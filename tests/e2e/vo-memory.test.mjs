@@ -17,9 +17,8 @@ import assert from 'node:assert/strict';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { chromium } from 'playwright-core';
-import { serve, ROOT } from './harness.mjs';
-import { CHROMIUM_ARGS, cliAte, growth, hostLanes, longFolder, runVo, slope } from '../benchmarks/vo_memory.mjs';
+import { serve, ROOT, launchChromium } from './harness.mjs';
+import { cliAte, growth, hostLanes, longFolder, runVo, slope } from '../benchmarks/vo_memory.mjs';
 
 const DIST = path.resolve(process.env.DIST || path.join(ROOT, 'dist'));
 const CLI = process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab');
@@ -37,7 +36,7 @@ before(async () => {
   assert.ok(fs.existsSync(CLI), `${CLI} missing: cargo build --release --bin siftlab`);
   tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-memory-'));
   server = await serve(DIST, { hooks: false });
-  browser = await chromium.launch({ executablePath: process.env.CHROMIUM || '/usr/bin/chromium', args: [...CHROMIUM_ARGS, '--js-flags=--expose-gc'] });
+  browser = await launchChromium();
 });
 after(async () => {
   await browser?.close();

@@ -13,8 +13,7 @@ import { spawnSync } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
-import { chromium } from 'playwright-core';
-import { serve, ROOT } from './harness.mjs';
+import { serve, ROOT, launchChromium } from './harness.mjs';
 
 const CLI = process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab');
 const DEMO = path.join(ROOT, 'www/demo/MyKITTI');
@@ -29,11 +28,7 @@ const cli = {};
 
 before(async () => {
   server = await serve(path.join(ROOT, 'dist'), { hooks: false });
-  browser = await chromium.launch({
-    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-    args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-      '--disable-component-update', '--disable-sync'],
-  });
+  browser = await launchChromium();
   // The CLI's poses and metrics for each tracker on the same frames.
   for (const [name, args] of Object.entries(RUNS)) {
     const tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-workers-'));

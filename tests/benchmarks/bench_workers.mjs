@@ -1,6 +1,6 @@
 // The odometry's speed in Chromium against the worker count, and the comparison view's wall
 // time against an older build, in one run (Playwright; the builds alternate round by round):
-//   node tests/e2e/bench_workers.mjs [--before DIST] [--rounds R] [--frames F]
+//   node tests/benchmarks/bench_workers.mjs [--before DIST] [--rounds R] [--frames F]
 // - the odometry view (LK) on frames 0 … F−1 with workers=1, 2 and 3: frames/s from the
 //   page's own "over N frames · S s"; and with the default workers, in both builds;
 // - the comparison view ("Run all four") on the same frames with the default workers: wall
@@ -8,8 +8,7 @@
 //   build's dist/ served beside it.
 // Prints JSON. Defaults: 1 round, 100 frames (the demo's 0-99).
 import path from 'node:path';
-import { chromium } from 'playwright-core';
-import { serve, ROOT } from './harness.mjs';
+import { serve, ROOT, launchChromium } from '../e2e/harness.mjs';
 
 const opt = (name, d) => { const i = process.argv.indexOf(name); return i > 0 ? process.argv[i + 1] : d; };
 const rounds = Number(opt('--rounds', 1));
@@ -20,11 +19,7 @@ const median = (v) => [...v].sort((a, b) => a - b)[Math.floor(v.length / 2)];
 
 const servers = { after: await serve(path.join(ROOT, 'dist'), { hooks: false }) };
 if (before) servers.before = await serve(path.resolve(before), { hooks: false });
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-    '--disable-component-update', '--disable-sync'],
-});
+const browser = await launchChromium();
 
 async function open(base, query = '') {
   const page = await browser.newPage({ viewport: { width: 1400, height: 900 } });

@@ -4,7 +4,7 @@
 //   where relaxed SIMD validates), the SIMD128 worker (`?wasm=portable`), the CLI on all cores
 //   and on one core;
 // - the odometry view on the demo frames (0-99), each build in turn, `--vo-rounds` times.
-//   BASE_URL=http://127.0.0.1:8080/ node tests/e2e/bench.mjs [--vo-rounds 2] [--vo-dataset DIR --vo-frames N]
+//   BASE_URL=http://127.0.0.1:8080/ node tests/benchmarks/bench.mjs [--vo-rounds 2] [--vo-dataset DIR --vo-frames N]
 // (dist/ served, CLI built). --vo-dataset runs the odometry on a MyKITTI folder instead of
 // the demo; --vo-frames N runs N frames (frames 0 … N−1: the page's FRAME_ID is N−1, as
 // view_trajectory counts); the trajectory error is checked against the CLI's
@@ -12,7 +12,7 @@
 import { execFileSync, spawnSync } from 'node:child_process';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
-import { chromium } from 'playwright-core';
+import { launchChromium } from '../e2e/harness.mjs';
 
 const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const BASE = process.env.BASE_URL || 'http://127.0.0.1:8080/';
@@ -27,10 +27,7 @@ const opt = (name) => { const i = process.argv.indexOf(name); return i > 0 ? pro
 const voDataset = opt('--vo-dataset') && path.resolve(opt('--vo-dataset'));
 const voFrames = opt('--vo-frames');
 
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run', '--disable-component-update', '--disable-sync'],
-});
+const browser = await launchChromium();
 const builds = { relaxed: '', portable: '&wasm=portable' };
 // src=folder: no demo autoload, so exactly one SIFT runs at a time.
 const pages = {};

@@ -1,13 +1,9 @@
 // Developer helper: open the app, wait for the demo, print console messages, save a screenshot.
-//   node tests/e2e/shot.mjs http://127.0.0.1:8080/ out.png [width]
-import { chromium } from 'playwright-core';
+//   node tests/benchmarks/shot.mjs http://127.0.0.1:8080/ out.png [width]
+import { launchChromium } from '../e2e/harness.mjs';
 
-const [url = 'http://127.0.0.1:8080/', out = 'screenshots/shot.png', width = '1400'] = process.argv.slice(2);
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-         '--disable-component-update', '--disable-sync'],
-});
+const [url = 'http://127.0.0.1:8080/', out = 'shot.png', width = '1400'] = process.argv.slice(2);
+const browser = await launchChromium();
 const page = await browser.newPage({ viewport: { width: Number(width), height: 900 } });
 page.on('console', (m) => console.log(`[console.${m.type()}] ${m.text()}`));
 page.on('pageerror', (e) => console.log(`[pageerror] ${e}`));

@@ -1,11 +1,10 @@
 // "Mark my code" in Chromium: the time to mark the correct solution, this build (dist/)
 // against an older build's dist/, alternating round by round (Playwright):
-//   node tests/e2e/bench_mark.mjs --before OLD_DIST [--rounds 3] [--n 25] [--seed 0]
+//   node tests/benchmarks/bench_mark.mjs --before OLD_DIST [--rounds 3] [--n 25] [--seed 0]
 // Wall time from the click on "Mark" to the report (SIFT of the frames, Python's start and
 // every call). Both must give 20.00. Prints one line per run and JSON with the medians.
 import path from 'node:path';
-import { chromium } from 'playwright-core';
-import { serve, ROOT } from './harness.mjs';
+import { serve, ROOT, launchChromium } from '../e2e/harness.mjs';
 
 const opt = (name, d) => { const i = process.argv.indexOf(name); return i > 0 ? process.argv[i + 1] : d; };
 const rounds = Number(opt('--rounds', 3));
@@ -19,11 +18,7 @@ const servers = {
   before: await serve(path.resolve(before), { hooks: false }),
   after: await serve(path.join(ROOT, 'dist'), { hooks: false }),
 };
-const browser = await chromium.launch({
-  executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-background-networking', '--no-first-run',
-    '--disable-component-update', '--disable-sync'],
-});
+const browser = await launchChromium();
 const file = path.join(ROOT, 'tests/fixtures/mark/good/vision_tasks.py');
 const times = { before: [], after: [] };
 for (let r = 0; r < rounds; r++) {
