@@ -1,6 +1,6 @@
 //! Where wasm SIFT's time goes, stage by stage, in the browser: the base image (upsampling
 //! and its blur), the pyramid's level blurs, the scan with refinement and orientation, and
-//! the descriptors, on the demo frames 0–5, best of three per stage. Run it in both worker
+//! the descriptors, on the demo frames 0–5, best of three per stage (`ROUNDS`). Run it in both worker
 //! builds (docs/performance.md, "The SIMD128 path") to see what the FMA emulation costs:
 //! `cargo test --release --target wasm32-unknown-unknown -p siftlab-core --no-default-features [--features relaxed-simd] --test wasm_stages -- --nocapture`
 //! It prints one `WASM_STAGES` line per frame (timings are printed, never asserted: the
@@ -33,6 +33,14 @@ const FRAMES: [&[u8]; 6] = [
     include_bytes!("../../www/demo/MyKITTI/gray/00/image_0/000005.png"),
 ];
 
+/// Rounds per frame, the best of which is printed: 3 for the timings;
+/// `tests/run` builds it with `SIFTLAB_WASM_STAGES_ROUNDS=1` (it checks the
+/// keypoints, which one round does as well, in three builds and engines).
+const ROUNDS: usize = match option_env!("SIFTLAB_WASM_STAGES_ROUNDS") {
+    Some(s) if s.len() == 1 && s.as_bytes()[0] == b'1' => 1,
+    _ => 3,
+};
+
 fn timed<T>(f: impl FnOnce() -> T) -> (T, f64) {
     let t0 = performance_now();
     let v = f();
@@ -61,7 +69,7 @@ fn sift_stages_in_the_browser() {
         let img = GrayImage::decode(bytes).expect("demo frame decodes");
         // [base, base blur alone, level blurs, detect, detect_and_compute]
         let mut best = [f64::INFINITY; 5];
-        for _ in 0..3 {
+        for _ in 0..ROUNDS {
             let (base, t_base) = timed(|| initial_image(&img, p.sigma));
             // The base's blur alone, on a plane of the base's size.
             let (_, t_base_blur) = timed(|| gaussian_blur(&base, sig[0]));

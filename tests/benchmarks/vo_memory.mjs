@@ -148,6 +148,25 @@ export function growth(samples, from, { window = 20, tail = 3 } = {}) {
 }
 
 /**
+ * How the floor of `samples` (their least value, `key`) moves from the frames just after
+ * `from` (`from` … `from` + `span`) to the last `tail` samples, per frame. A leak raises
+ * the floor; garbage a collection has not reached yet only adds spikes (V8 after `gc()`
+ * still varies by several MB between samples), which a median of a few samples mistakes
+ * for growth.
+ */
+export function floorGrowth(samples, from, { key = 'page', span = 60, tail = 6 } = {}) {
+  const running = samples.filter((s) => s.frame > 0);
+  const a = running.filter((s) => s.frame >= from && s.frame <= from + span);
+  const b = running.slice(-tail);
+  if (!a.length || b.length < tail) return null;
+  const fa = median(a.map((s) => s.frame));
+  const fb = median(b.map((s) => s.frame));
+  const ra = Math.min(...a.map((s) => s[key]));
+  const rb = Math.min(...b.map((s) => s[key]));
+  return { fromFrame: fa, toFrame: fb, fromRss: ra, toRss: rb, bytesPerFrame: fb > fa ? (rb - ra) / (fb - fa) : NaN };
+}
+
+/**
  * On `page` (served at `base`): opens `dir` by the folder input, runs the odometry on frames
  * 0 … frames−1 (LK) and samples the RSS every `everyMs`. Resolves to the run's record.
  * `stopBytes`: stop (the page's Stop button) once the Chromium processes hold more.
@@ -281,7 +300,6 @@ async function main() {
     log(`CLI: ATE ${cli.ate} m in ${cli.wallS.toFixed(1)} s`);
   }
   const ram = memTotalBytes();
-  const { chromium } = require('playwright-core');
   const server = await serve(a.dist, { hooks: false });
   const browser = await launchChromium();
   let rec;

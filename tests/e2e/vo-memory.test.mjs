@@ -6,8 +6,10 @@
 // a second (tests/benchmarks/vo_memory.mjs). Asserts:
 // - the page's ATE equals the CLI's view_trajectory 599 on the same folder;
 // - what the page holds (its JS heap, collected before each sample, and its wasm memory)
-//   grows by less than 20 KB a frame between about frame 200 and the end of the run
-//   (medians of the samples there): the run keeps a few hundred bytes of results a frame,
+//   grows by less than 20 KB a frame from frame 200 (half a shorter run: the page's
+//   caches fill over the first ~150 frames) to the end: its floor, the least sample in
+//   each place (tests/benchmarks/vo_memory.mjs, floorGrowth), since the JS heap still
+//   varies by several MB after a collection: the run keeps a few hundred bytes of results a frame,
 //   not each frame's file and points (~0.5 MB a frame before issue 44's fix);
 // - the renderer's peak RSS (the page, its workers and the browser's own bounded caches of
 //   decoded frames, which fill over the first few hundred frames) stays below 1.5 GB.
@@ -18,12 +20,12 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { serve, ROOT, launchChromium } from './harness.mjs';
-import { cliAte, growth, hostLanes, longFolder, runVo, slope } from '../benchmarks/vo_memory.mjs';
+import { cliAte, floorGrowth, growth, hostLanes, longFolder, runVo, slope } from '../benchmarks/vo_memory.mjs';
 
 const DIST = path.resolve(process.env.DIST || path.join(ROOT, 'dist'));
 const CLI = process.env.SIFTLAB_CLI || path.join(ROOT, 'target/release/siftlab');
 const FRAMES = Number(process.env.E2E_MEMORY_FRAMES || 600);
-const FROM = Math.min(200, Math.floor(FRAMES / 3));
+const FROM = Math.min(200, Math.floor(FRAMES / 2));
 const BOUND_KB = 20;
 const LANES = hostLanes();
 const MB = 1024 * 1024;
@@ -36,7 +38,7 @@ before(async () => {
   assert.ok(fs.existsSync(CLI), `${CLI} missing: cargo build --release --bin siftlab`);
   tmp = fs.mkdtempSync(path.join(os.tmpdir(), 'siftlab-vo-memory-'));
   server = await serve(DIST, { hooks: false });
-  browser = await launchChromium();
+  browser = await launchChromium(['--js-flags=--expose-gc', '--enable-precise-memory-info']);
 });
 after(async () => {
   await browser?.close();
@@ -52,7 +54,7 @@ test(`odometry over ${FRAMES} frames: the CLI's ATE, the page's memory growth be
   const rec = await runVo(page, { base: server.base, dir, frames: FRAMES, lanes: LANES, gc: true, log: (s) => console.log(`# ${s}`) });
   await context.close();
   const g = growth(rec.samples, FROM);
-  const own = growth(rec.samples.map((s) => ({ ...s, renderer: s.page })), FROM);
+  const own = floorGrowth(rec.samples, FROM);
   const fit = slope(rec.samples.filter((s) => s.frame >= FROM));
   const figures = {
     dist: DIST, frames: FRAMES, outcome: rec.outcome, elapsed_s: Math.round(rec.elapsedS * 10) / 10, page_done: rec.pageDone,
@@ -66,7 +68,7 @@ test(`odometry over ${FRAMES} frames: the CLI's ATE, the page's memory growth be
   assert.equal(rec.outcome, 'done', `the run ended with ${rec.outcome}${rec.pageError ? `: ${rec.pageError}` : ''}`);
   assert.deepEqual(rec.errors, [], 'errors thrown in the page');
   assert.equal(rec.pageAte, cli.ate, 'the page\'s ATE differs from the CLI\'s');
-  assert.ok(own && own.toFrame - own.fromFrame >= FRAMES / 2, `too few samples to measure the growth: ${JSON.stringify(own)}`);
+  assert.ok(own && own.toFrame - own.fromFrame >= FRAMES / 4, `too few samples to measure the growth: ${JSON.stringify(own)}`);
   // What the page holds (its JS heap after a collection, and its wasm memory) grows by
   // the results only: a few hundred bytes a frame, far below the bound.
   assert.ok(own.bytesPerFrame < BOUND_KB * 1024,

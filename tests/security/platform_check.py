@@ -229,8 +229,8 @@ def run_case(platform, variant, bundle, siftlab, n, seed, python, keep, control=
         else:
             reasons += prairielearn_fields(got, variant == "syntax")
             # PrairieLearn's images: the first wrong case of each task drawn
-            # (inverted: nndr's), a JPEG data URL, the file under 1 MB.
-            reasons += prairielearn_images(got, os.path.getsize(res_path), {"inverted": ["nndr"]}.get(variant, []))
+            # (the good file: none; inverted: nndr's), a JPEG data URL, the file under 1 MB.
+            reasons += prairielearn_images(got, os.path.getsize(res_path), variant)
             total = round(got.get("score", -1) * 20, 2) if isinstance(got.get("score"), float) else None
             tasks = {t.get("name"): t.get("points") for t in got.get("tests", [])}
         if total != want_total:
@@ -276,13 +276,18 @@ def prairielearn_fields(j, not_gradable):
     return bad
 
 
-def prairielearn_images(j, size, want):
+def prairielearn_images(j, size, variant):
     bad = []
     if size > 1000000:
         bad.append("results.json is %d bytes, over PrairieLearn's 1 MB" % size)
     tests = j.get("tests") or []
     have = [t.get("name") for t in tests if "images" in t]
-    if have != want:
+    # A picture only where a task lost marks; the good file none, inverted nndr's.
+    lost = [t.get("name") for t in tests if t.get("points") != 5.0]
+    if any(h not in lost for h in have):
+        bad.append("pictures for %s, but only %s lost marks" % (have, lost))
+    want = {"good": [], "inverted": ["nndr"]}.get(variant)
+    if want is not None and have != want:
         bad.append("pictures for %s, not %s" % (have, want))
     for t in tests:
         for im in t.get("images", []):

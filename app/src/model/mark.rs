@@ -26,9 +26,6 @@ impl Default for MarkState {
 pub const DEFAULT_CASES: u32 = siftlab_mark::DEFAULT_CASES as u32;
 /// At most this many cases per task from the link or the box.
 pub const MAX_CASES: u32 = 200;
-/// The lab's limits, in ms.
-pub const CALL_LIMIT_MS: i32 = 10_000;
-pub const TASK_LIMIT_MS: f64 = 300_000.0;
 /// The reference workload's time (`www/mark-worker.js`, `REFERENCE`: the
 /// median of three runs after a warm-up) on the machine the browser's
 /// limits take for the lab's: Chromium 156 on the 2-core build machine, the

@@ -213,21 +213,6 @@ impl Drop for MarkWorker {
     }
 }
 
-/// SIFT's features of `bytes` through the page's pool (and its cache).
-async fn features_of(bytes: Vec<u8>) -> Result<siftlab_core::sift::Features, String> {
-    let (p, (res, rej)) = promise();
-    let slot: Rc<RefCell<Option<Result<siftlab_core::sift::Features, String>>>> = Rc::default();
-    let out = slot.clone();
-    super::sift_pool::features(bytes, move |r| {
-        let ok = r.is_ok();
-        *out.borrow_mut() = Some(r.map(|r| r.features));
-        let _ = if ok { res.call0(&JsValue::NULL) } else { rej.call0(&JsValue::NULL) };
-    });
-    let _ = wasm_bindgen_futures::JsFuture::from(p).await;
-    let r = slot.borrow_mut().take();
-    r.unwrap_or_else(|| Err("SIFT did not answer".into()))
-}
-
 /// The worker's script behind a `blob:` URL. A worker loaded from a URL
 /// gets the policy of that response's headers (none from a static server),
 /// a `blob:` worker inherits the page's CSP (`connect-src 'self'`, no
@@ -295,8 +280,7 @@ pub async fn run(
         Ok(t) => t.to_string(),
         Err(r) => return Ok((Marks::rejected(seed, n, r), timing)),
     };
-    let ids = source.frames();
-    let frames: Vec<u32> = ids.iter().copied().filter(|&f| f >= 1 && ids.contains(&(f - 1))).collect();
+    let frames = siftlab_mark::markable_frames(source.frames());
     if frames.is_empty() {
         return Err("marking needs frame pairs: load the demo or a MyKITTI folder".into());
     }
@@ -304,13 +288,13 @@ pub async fn run(
     // and a call over its limit is re-run once (docs/marking.md).
     let mut session = Session::new(&text, seed, n, &frames, Limits::wall_clock(SPEED_CAP));
     // SIFT of every frame the cases use, once each (the pool's workers in parallel).
-    let needed: BTreeSet<u32> = session.cases().iter().flat_map(|c| [c.frame() - 1, c.frame()]).collect();
+    let needed = siftlab_mark::frames_needed(session.cases());
     let t0 = now_ms();
     let mut features = BTreeMap::new();
     for (k, &id) in needed.iter().enumerate() {
         progress(format!("SIFT of the {} frames the cases use: {k} done", needed.len()));
         let b = super::loading::frame_bytes(&source, id).await?;
-        features.insert(id, features_of(b).await.map_err(|e| format!("frame {id}: {e}"))?);
+        features.insert(id, super::sift_pool::features_async(b).await.map_err(|e| format!("frame {id}: {e}"))?);
     }
     let used: BTreeSet<u32> = session.cases().iter().map(|c| c.frame()).collect();
     let mut pairs = Features(

@@ -307,15 +307,6 @@ pub fn replay(
     });
 }
 
-/// The SIFT pool's features of `bytes`, awaited.
-async fn features_of(bytes: Vec<u8>) -> Result<Features, String> {
-    let (tx, rx) = futures_channel::oneshot::channel();
-    sift_pool::features(bytes, move |r| {
-        let _ = tx.send(r.map(|r| r.features));
-    });
-    rx.await.map_err(|_| "the SIFT workers stopped".to_string())?
-}
-
 /// The files and features a [`VoRequest::Replay`] of `frame` carries.
 async fn replay_request(
     source: &FrameSource,
@@ -339,17 +330,17 @@ async fn replay_request(
         if frame == 0 {
             return Ok(request(Vec::new(), Vec::new(), None, Vec::new()));
         }
-        let prev = features_of(source.bytes(frame - 1).await?).await?;
-        let cur = features_of(source.bytes(frame).await?).await?;
+        let prev = sift_pool::features_async(source.bytes(frame - 1).await?).await?;
+        let cur = sift_pool::features_async(source.bytes(frame).await?).await?;
         return Ok(request(Vec::new(), Vec::new(), None, vec![prev, cur]));
     }
     let mut frames = Vec::with_capacity(frame + 1 - from);
     for i in from..=frame {
         frames.push(source.bytes(i).await?);
     }
-    let refs = points(&features_of(frames[0].clone()).await?);
+    let refs = points(&sift_pool::features_async(frames[0].clone()).await?);
     let detected = match (redetected && frame > from, frames.last()) {
-        (true, Some(last)) => Some(points(&features_of(last.clone()).await?)),
+        (true, Some(last)) => Some(points(&sift_pool::features_async(last.clone()).await?)),
         _ => None,
     };
     Ok(request(frames, refs, detected, Vec::new()))

@@ -212,6 +212,16 @@ pub fn cached(bytes: &[u8], lanes: usize) -> Option<SiftResult> {
     POOL.with(|p| p.borrow_mut().cache_get(key)).filter(has_gray)
 }
 
+/// The pool's features of `bytes` (from its cache or a worker), awaited:
+/// the marking's and the odometry's one way to ask.
+pub async fn features_async(bytes: Vec<u8>) -> Result<siftlab_core::sift::Features, String> {
+    let (tx, rx) = futures_channel::oneshot::channel();
+    features(bytes, move |r| {
+        let _ = tx.send(r.map(|r| r.features));
+    });
+    rx.await.map_err(|_| "the SIFT workers stopped".to_string())?
+}
+
 /// Whether `r` can be drawn: an odometry frame's result is cached without
 /// its gray image (0.47 MB per KITTI frame), and the page has no image
 /// decoder of its own (it stays small), so such a hit goes to a worker again.

@@ -12,7 +12,9 @@ use crate::transport::Runner;
 use siftlab_core::dataset::Dataset;
 use siftlab_core::error::{Error, Result};
 use siftlab_core::sift::{detect_and_compute, Features, SiftParams};
-use siftlab_mark::{escaped, report_json, report_text, Case, Limits, Marks, Pair, Session};
+use siftlab_mark::{
+    escaped, frames_needed, markable_frames, report_json, report_text, Case, Limits, Marks, Pair, Session,
+};
 use std::collections::HashMap;
 use std::io::Write;
 use std::time::Instant;
@@ -122,35 +124,33 @@ pub(crate) fn frame_pairs(
     cases: &[Case],
     fingerprint: bool,
 ) -> Result<(Vec<Pair>, String)> {
-    let ids: std::collections::BTreeSet<u32> = cases.iter().map(Case::frame).collect();
     let mut frames: HashMap<u32, Features> = HashMap::new();
     let mut digests = Vec::new();
-    for &f in &ids {
-        for g in [f - 1, f] {
-            if let std::collections::hash_map::Entry::Vacant(e) = frames.entry(g) {
-                let img = ds.load_frame(g as usize)?;
-                if fingerprint {
-                    let mut bytes = format!("{g}:{}x{}:", img.width(), img.height()).into_bytes();
-                    bytes.extend_from_slice(img.data());
-                    digests.extend_from_slice(sha256_hex(&bytes).as_bytes());
-                }
-                e.insert(detect_and_compute(&img, params));
-            }
+    for g in frames_needed(cases) {
+        let img = ds.load_frame(g as usize)?;
+        if fingerprint {
+            let mut bytes = format!("{g}:{}x{}:", img.width(), img.height()).into_bytes();
+            bytes.extend_from_slice(img.data());
+            digests.extend_from_slice(sha256_hex(&bytes).as_bytes());
         }
+        frames.insert(g, detect_and_compute(&img, params));
     }
+    let ids: std::collections::BTreeSet<u32> = cases.iter().map(Case::frame).collect();
     let pairs = ids.iter().map(|&f| Pair { id: f, prev: frames[&(f - 1)].clone(), cur: frames[&f].clone() }).collect();
     Ok((pairs, if fingerprint { sha256_hex(&digests) } else { String::new() }))
 }
 
-/// FRAME_IDs 1.. whose frame and previous frame are in the dataset.
+/// The FRAME_IDs a marking may draw from the dataset's frames
+/// (`siftlab_mark::markable_frames`: each with its previous frame).
 pub(crate) fn frame_ids(ds: &Dataset) -> Result<Vec<u32>> {
     let count = ds.frame_count() as u32;
-    if count < 2 {
+    let frames = markable_frames(&(0..count).collect::<Vec<_>>());
+    if frames.is_empty() {
         return Err(Error::Dataset(format!(
             "{} has {count} frame(s) in {}/ from 000000.png on: marking needs at least two",
             ds.root().display(),
             ds.sequence().frame_dir()
         )));
     }
-    Ok((1..count).collect())
+    Ok(frames)
 }

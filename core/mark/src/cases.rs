@@ -107,6 +107,21 @@ impl Case {
     }
 }
 
+/// The FRAME_IDs a marking may draw from the frames `present`: each whose
+/// previous frame is present too (a pair), ascending, each once. The CLI
+/// and the app both decide with this.
+pub fn markable_frames(present: &[u32]) -> Vec<u32> {
+    let have: std::collections::BTreeSet<u32> = present.iter().copied().collect();
+    have.iter().copied().filter(|&f| f >= 1 && have.contains(&(f - 1))).collect()
+}
+
+/// The frames the cases read (each case's previous and current frame),
+/// ascending, each once: what SIFT must run on before a marking.
+pub fn frames_needed(cases: &[Case]) -> Vec<u32> {
+    let set: std::collections::BTreeSet<u32> = cases.iter().flat_map(|c| [c.frame() - 1, c.frame()]).collect();
+    set.into_iter().collect()
+}
+
 /// A threshold argument as Python prints it: `232.5`, `None`.
 pub fn py_threshold(t: Option<f64>) -> String {
     t.map_or("None".to_string(), py_float)
@@ -181,6 +196,18 @@ fn ratio(rng: &mut CvRng) -> f64 {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn frames_a_marking_uses() {
+        assert_eq!(super::markable_frames(&[5, 0, 1, 2, 4, 2, 7]), [1, 2, 5]);
+        assert!(super::markable_frames(&[3]).is_empty());
+        let cases = super::plan(1, 2, &[1, 2, 5]);
+        let needed = super::frames_needed(&cases);
+        assert!(needed.windows(2).all(|w| w[0] < w[1]));
+        for c in &cases {
+            assert!(needed.contains(&(c.frame() - 1)) && needed.contains(&c.frame()));
+        }
+    }
+
     use super::*;
 
     #[test]

@@ -32,7 +32,7 @@ mod source;
 mod summary;
 
 pub use b64::{base64, unbase64};
-pub use cases::{plan, py_threshold, Case, Task, DEFAULT_CASES, NUM_FEATURES};
+pub use cases::{frames_needed, markable_frames, plan, py_threshold, Case, Task, DEFAULT_CASES, NUM_FEATURES};
 pub use diagnose::{failed_call, judge, CaseResult, Diagnosis, Difference, Status};
 pub use escape::{escaped, is_clean};
 pub use knn::{knn_answer, knn_answer_until, max_rows};

@@ -10,7 +10,7 @@ import os from 'node:os';
 import path from 'node:path';
 import { ROOT } from '../harness.mjs';
 import {
-  appSuite, CLI, DATASET, cliCached, shot, metrics, LANES, BASE, page, tid, idle, tuple, cliRet8,
+  appSuite, CLI, DATASET, cliCached, shot, metrics, LANES, BASE, page, tid, idle,
 } from './common.mjs';
 
 appSuite();
@@ -102,16 +102,12 @@ test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI 
   assert.deepEqual(bad, cliMarks(cliMark('inverted', MARK_N, 1)));
   assert.ok(bad.diagnoses.some((d) => d.startsWith('nndr:')), JSON.stringify(bad));
   await page.elementScreenshot(tid('mark'), shot('mark-nndr-inverted.png'));
-  // "see this case" on the wrong nndr call: the explorer on its pair, ratio and first
-  // differing feature, whose tuple is get_info's.
+  // "see this case" on the wrong nndr call: the explorer's link on its pair, ratio and first
+  // differing feature (the class view's test follows such a link to get_info's tuple).
   const cases = cliMark('inverted', MARK_N, 1).cases.filter((c) => c.task === 'nndr' && c.status === 'wrong');
   const links = await page.evalAll(`${tid('mark-failure')}[data-task="nndr"] ${tid('see-case')}`, (a) => a.getAttribute('href'));
+  assert.ok(cases.length > 0);
   assert.deepEqual(links, cases.map((c) => `?src=demo&frame=${c.frame}&feature=${c.differs_at}&algo=nndr&t=${c.threshold}`));
-  const q = new URLSearchParams(links[0]);
-  await page.goto(`${BASE}${links[0]}&lanes=${LANES}`);
-  await idle();
-  marked = { page: null, url: null };
-  assert.equal(await tuple(), cliRet8(['-a', 'nndr', '-t', q.get('t'), q.get('frame'), q.get('feature')]), links[0]);
 });
 
 // Hostile files in the browser (tests/fixtures/mark/hostile), one call per task (each attack
