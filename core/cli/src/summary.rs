@@ -96,22 +96,11 @@ pub fn main(dirs: &[std::path::PathBuf], out: Option<&Path>) -> i32 {
     }
 }
 
-/// Text for HTML: the five characters that could start markup or end an
-/// attribute, escaped.
+/// Text for HTML: the SVG writer's escape (`&`, `<`, `>`, `"`), plus `'`,
+/// and control characters as spaces.
 fn esc(s: &str) -> String {
-    let mut o = String::with_capacity(s.len());
-    for c in s.chars() {
-        match c {
-            '&' => o.push_str("&amp;"),
-            '<' => o.push_str("&lt;"),
-            '>' => o.push_str("&gt;"),
-            '"' => o.push_str("&quot;"),
-            '\'' => o.push_str("&#39;"),
-            c if c.is_control() => o.push(' '),
-            c => o.push(c),
-        }
-    }
-    o
+    let plain: String = s.chars().map(|c| if c.is_control() { ' ' } else { c }).collect();
+    siftlab_core::render::plot::svg::escape(&plain).replace('\'', "&#39;")
 }
 
 fn num(j: Option<&Json>) -> String {
