@@ -14,9 +14,9 @@ use siftlab_core::render::plot::{raster::rasterize, svg::to_svg};
 use siftlab_core::sift::SiftParams;
 use siftlab_core::vo::export::{kitti_text, tum_text};
 use siftlab_core::vo::matched::MatchedOdometry;
-use siftlab_core::vo::metrics::{ate_rmse, describe_kitti_segments, evaluate, kitti_segments, TrajectoryMetrics};
-use siftlab_core::vo::odometry::{pose_row, run, sift_detector};
-use siftlab_core::vo::{Odometry, StepResult};
+use siftlab_core::vo::metrics::TrajectoryMetrics;
+use siftlab_core::vo::odometry::{run, sift_detector};
+use siftlab_core::vo::{Odometry, Record, StepResult};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
@@ -116,22 +116,19 @@ pub fn view_trajectory(
         }
     };
 
-    let est: Vec<[f64; 3]> = steps.iter().map(|s| s.position).collect();
-    let gt: Vec<[f64; 3]> = ds.poses()[..n].iter().map(siftlab_core::dataset::position).collect();
-    let ate = ate_rmse(&est, &gt)?;
-    let poses: Vec<_> = steps.iter().map(|s| (s.rotation, s.position)).collect();
-    let rows: Vec<_> = poses.iter().map(|(r, t)| pose_row(r, t)).collect();
-    let metrics = evaluate(&rows, &ds.poses()[..n])?;
-    let segments = kitti_segments(&ds.poses()[..n]);
+    let mut record = Record::default();
+    steps.iter().for_each(|s| record.push(s));
+    let end = record.finish(ds.poses())?;
+    let (est, gt) = (record.positions(), &end.truth);
 
     if let Some(path) = opts.save_poses {
-        write(path, kitti_text(&poses).as_bytes(), "the poses")?;
+        write(path, kitti_text(record.poses()).as_bytes(), "the poses")?;
     }
     if let Some(path) = opts.save_poses_tum {
-        write(path, tum_text(&poses).as_bytes(), "the TUM poses")?;
+        write(path, tum_text(record.poses()).as_bytes(), "the TUM poses")?;
     }
     if let Some(path) = opts.metrics {
-        write(path, (metrics.to_json_with_segments(segments.len()) + "\n").as_bytes(), "the metrics")?;
+        write(path, (end.metrics.to_json_with_segments(end.segments.len()) + "\n").as_bytes(), "the metrics")?;
     }
     if let (Some(file), Some(path)) = (&mut trace, opts.trace) {
         file.write_all(trace_jsonl(&steps).as_bytes())
@@ -139,13 +136,13 @@ pub fn view_trajectory(
     }
     if let (Some(path), Some(svg)) = (opts.plot, svg) {
         let (name, style) = run_style(opts.strategy.as_ref());
-        let scene = report_figure(&gt, &[Run { name, style, positions: est.clone() }], 720);
+        let scene = report_figure(gt, &[Run { name, style, positions: est.clone() }], 720);
         let bytes =
             if svg { to_svg(&scene, None).into_bytes() } else { siftlab_core::render::encode_png(&rasterize(&scene))? };
         write(path, &bytes, "the plot")?;
     }
 
-    write_png(out_png, &est, &gt)?;
+    write_png(out_png, &est, gt)?;
 
     let p = est[n - 1];
     let g = gt[n - 1];
@@ -155,13 +152,12 @@ pub fn view_trajectory(
         "final position: x={:.4} y={:.4} z={:.4} (ground truth {:.4} {:.4} {:.4})",
         p[0], p[1], p[2], g[0], g[1], g[2]
     );
-    let _ = writeln!(out, "trajectory error (ATE RMSE, {n} frames): {ate:.4} m");
+    let _ = writeln!(out, "trajectory error (ATE RMSE, {n} frames): {:.4} m", end.ate);
     // The summary is the app's line too (`TrajectoryMetrics::summary`); the
     // segments the KITTI figures rest on follow on a line of their own.
-    let _ = writeln!(out, "{} ({n} frames): {}", run_style(opts.strategy.as_ref()).0, metrics.summary());
-    let path: f64 = gt.windows(2).map(|w| siftlab_core::dataset::dist3(&w[0], &w[1])).sum();
-    let _ = write!(out, "KITTI metric: {} (true path {path:.1} m)", describe_kitti_segments(&segments));
-    Ok((out, metrics))
+    let _ = writeln!(out, "{} ({n} frames): {}", run_style(opts.strategy.as_ref()).0, end.metrics.summary());
+    out.push_str(&end.kitti_line());
+    Ok((out, end.metrics))
 }
 
 /// The lab's window after the last frame (truth green, estimate red, the

@@ -13,7 +13,7 @@ pub mod poses;
 
 pub use calib::{describe_camera, parse_calib};
 pub use layout::{frame_name, parse_sequence, scan_paths, Layout, SequenceFiles, SequenceLayout};
-pub use poses::{dist3, gt_scale, parse_poses, parse_poses_in, position, PoseRow, POSES_FILE};
+pub use poses::{check_pose_count, dist3, gt_scale, parse_poses, parse_poses_in, position, PoseRow, POSES_FILE};
 
 use crate::camera::Camera;
 use crate::{Error, Result};
@@ -266,15 +266,7 @@ impl Dataset {
             )));
         }
         let poses = self.require_poses("the odometry")?;
-        if n > poses.len() {
-            return Err(Error::Dataset(format!(
-                "frames 0 to {} are needed but {} has only {} pose lines",
-                n - 1,
-                self.seq.poses_file(),
-                poses.len()
-            )));
-        }
-        Ok(())
+        check_pose_count(&self.seq.poses_file(), poses.len(), n)
     }
 
     /// Frame `i` as `cv2.imread(path, 0)` reads it; a frame whose size is

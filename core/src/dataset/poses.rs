@@ -14,6 +14,21 @@ pub fn position(p: &PoseRow) -> [f64; 3] {
     [p[3], p[7], p[11]]
 }
 
+/// Checks that `file` (holding `have` poses) covers frames 0 … n − 1 before
+/// an odometry run reads any frame: the lab's loop takes each frame's scale
+/// from its true pose, so a short file would fail the run part way through.
+/// The one check the CLI, the app's loader and its tracking worker all make.
+pub fn check_pose_count(file: &str, have: usize, n: usize) -> Result<()> {
+    if have >= n {
+        return Ok(());
+    }
+    Err(Error::Dataset(format!(
+        "{file} has {have} poses but the odometry needs {n} (frames 0 to {}): the lab takes each frame's scale \
+         from its ground-truth pose",
+        n - 1
+    )))
+}
+
 /// Parses KITTI pose text: 12 numbers per non-empty line, separated by
 /// whitespace. Errors name the line (1-based) and what is wrong with it.
 pub fn parse_poses(text: &str) -> Result<Vec<PoseRow>> {
@@ -125,6 +140,17 @@ mod tests {
 
     const TWO: &str = "1 0 0 0 0 1 0 0 0 0 1 0\n\
         9.999978e-01 5.272628e-04 -2.066935e-03 -4.690294e-02 -5.296506e-04 9.999992e-01 -1.154865e-03 -2.839928e-02 2.066324e-03 1.155958e-03 9.999971e-01 8.586941e-01\n";
+
+    #[test]
+    fn a_short_poses_file_is_named_with_the_frames_it_lacks() {
+        assert!(check_pose_count("poses/03.txt", 3, 3).is_ok());
+        let e = check_pose_count("poses/03.txt", 2, 3).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            "poses/03.txt has 2 poses but the odometry needs 3 (frames 0 to 2): the lab takes each frame's scale \
+             from its ground-truth pose"
+        );
+    }
 
     #[test]
     fn parses_kitti_lines() {

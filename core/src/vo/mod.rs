@@ -4,7 +4,8 @@
 //! [`five_point`] kernel (`findEssentialMat`), [`recover_pose`](fn@recover_pose) picks R, t
 //! (`recoverPose`), [`odometry`] is the lab's accumulation loop, [`matched`]
 //! the same loop driven by the student's matcher instead of LK, [`metrics`]
-//! scores a trajectory against ground truth. [`linalg`] holds the numeric
+//! scores a trajectory against ground truth, [`Record`] keeps a run's poses
+//! and scores it at its end. [`linalg`] holds the numeric
 //! routines they share (OpenCV's Jacobi SVD, LU inverse, `solvePoly`, `cv::RNG`).
 
 // Every unsafe operation sits in its own `unsafe` block with the reason it
@@ -18,6 +19,7 @@ pub mod matched;
 pub mod metrics;
 pub mod odometry;
 pub(crate) mod ransac;
+pub(crate) mod record;
 pub(crate) mod recover_pose;
 #[cfg(test)]
 mod testing;
@@ -33,4 +35,5 @@ pub use metrics::{
 };
 pub use odometry::{pose_row, run, sift_detector, Odometry, StepDetail, StepResult, Steps};
 pub use ransac::{find_essential_mat, EssentialResult, RansacParams};
+pub use record::{kitti_line, Record, RunEnd};
 pub use recover_pose::{recover_pose, Pose};
