@@ -15,7 +15,7 @@ use siftlab_app::model::parse::parse_strategy;
 use siftlab_app::model::views::Views;
 use siftlab_app::page::{current_example, Explorer};
 use siftlab_app::protocol::sift::{SiftReply, SiftRequest};
-use siftlab_app::services::loading::frame_path;
+use siftlab_app::services::sources::frame_path;
 use siftlab_core::manual::EXAMPLES;
 use std::collections::BTreeMap;
 use std::sync::Arc;

@@ -20,4 +20,3 @@ pub mod selfcheck;
 pub mod sequence;
 pub mod urlstate;
 pub mod views;
-pub mod whole_frame;

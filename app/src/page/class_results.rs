@@ -6,7 +6,8 @@
 //! new tab: the class stays here). Model logic: `model::class_results`.
 
 use crate::model::class_results::{app_link, counts, list, read_summary, text, MAX_BYTES};
-use crate::services::loading::read_file;
+use crate::page::file_input::{dropped_file, picked_files};
+use crate::services::sources::{read_file, relative_path};
 use leptos::prelude::*;
 use siftlab_core::render::palette::{hex, BLUE, REST};
 use siftlab_mark::Json;
@@ -176,27 +177,20 @@ pub fn ClassResults() -> impl IntoView {
     };
     // A folder picked: its summary.json at the top (DIR/summary.json).
     let pick = move |ev: web_sys::Event| {
-        let input: web_sys::HtmlInputElement = event_target(&ev);
-        let Some(files) = input.files() else { return };
-        let all: Vec<web_sys::File> = (0..files.length()).filter_map(|i| files.get(i)).collect();
-        let top = |f: &web_sys::File| {
-            let p = js_sys::Reflect::get(f, &"webkitRelativePath".into())
-                .ok()
-                .and_then(|v| v.as_string())
-                .unwrap_or_default();
-            p.is_empty() || p.split('/').count() == 2
-        };
-        match all.into_iter().find(|f| f.name() == "summary.json" && top(f)) {
-            Some(f) => take(f),
-            None if files.length() == 1 => take(files.get(0).unwrap_or_else(|| unreachable!())),
+        let mut all = picked_files(&ev);
+        // "summary.json" alone, or "DIR/summary.json" of a picked folder.
+        let top = |f: &web_sys::File| relative_path(f).split('/').count() <= 2;
+        match all.iter().position(|f| f.name() == "summary.json" && top(f)) {
+            Some(i) => take(all.swap_remove(i)),
+            None if all.len() == 1 => take(all.swap_remove(0)),
+            None if all.is_empty() => {}
             None => error.set(Some(
                 "no summary.json at the top of that folder: pick the folder `siftlab mark --out DIR` wrote".into(),
             )),
         }
     };
     let on_drop = move |ev: web_sys::DragEvent| {
-        ev.prevent_default();
-        if let Some(f) = ev.data_transfer().and_then(|d| d.files()).and_then(|l| l.get(0)) {
+        if let Some(f) = dropped_file(&ev) {
             take(f);
         }
     };

@@ -5,8 +5,9 @@
 
 use crate::model::lab::Lab;
 use crate::model::mark::MAX_CASES;
-use crate::services::loading::read_file;
+use crate::page::file_input::{dropped_file, take_picked_file};
 use crate::services::mark::{run, Timing};
+use crate::services::sources::read_file;
 use leptos::prelude::*;
 use siftlab_mark::{Marks, Status};
 
@@ -156,14 +157,12 @@ pub fn MarkMyCode() -> impl IntoView {
         });
     };
     let on_pick = move |ev: web_sys::Event| {
-        let input: web_sys::HtmlInputElement = event_target(&ev);
-        if let Some(f) = input.files().and_then(|l| l.get(0)) {
+        if let Some(f) = take_picked_file(&ev) {
             take_file(f);
         }
     };
     let on_drop = move |ev: web_sys::DragEvent| {
-        ev.prevent_default();
-        if let Some(f) = ev.data_transfer().and_then(|d| d.files()).and_then(|l| l.get(0)) {
+        if let Some(f) = dropped_file(&ev) {
             take_file(f);
         }
     };

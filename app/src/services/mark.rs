@@ -293,7 +293,7 @@ pub async fn run(
     let mut features = BTreeMap::new();
     for (k, &id) in needed.iter().enumerate() {
         progress(format!("SIFT of the {} frames the cases use: {k} done", needed.len()));
-        let b = super::loading::frame_bytes(&source, id).await?;
+        let b = super::sources::frame_bytes(&source, id).await?;
         features.insert(id, super::sift_pool::features_async(b).await.map_err(|e| format!("frame {id}: {e}"))?);
     }
     let used: BTreeSet<u32> = session.cases().iter().map(|c| c.frame()).collect();

@@ -14,8 +14,8 @@
 
 use crate::protocol::odometry::{Tracker, VoReply, VoRequest};
 use crate::protocol::Request;
-use crate::services::loading::{frame_path, FrameSource, VoInputs};
 use crate::services::sift_pool;
+use crate::services::sources::{frame_path, FrameSource, VoInputs};
 use crate::services::worker_handle::WorkerHandle;
 use siftlab_core::sift::Features;
 use siftlab_core::vo::StepDetail;

@@ -75,10 +75,8 @@ struct VoSession {
     odo: siftlab_core::vo::Odometry,
     /// Set for a run driven by the student's matcher (`odo` then unused).
     matched: Option<siftlab_core::vo::MatchedOdometry>,
-    /// Estimated poses as KITTI rows, for the metrics.
-    rows: Vec<siftlab_core::dataset::PoseRow>,
-    est: Vec<[f64; 3]>,
-    truth: Vec<[f64; 3]>,
+    /// The poses so far, scored after the last frame.
+    record: siftlab_core::vo::Record,
     t0: f64,
 }
 
@@ -89,28 +87,11 @@ impl VoSession {
         use siftlab_core::vo::Odometry;
         let t0 = now_ms();
         let poses = parse_poses_in(poses, "the poses file").map_err(|e| e.to_string())?;
-        if poses.len() < total {
-            return Err(format!(
-                "the poses file has {} poses but {} frames were asked for: the lab takes the scale from the ground truth of every frame",
-                poses.len(),
-                total
-            ));
-        }
+        siftlab_core::dataset::check_pose_count("the poses file", poses.len(), total).map_err(|e| e.to_string())?;
         let mut odo = Odometry::new(camera).map_err(|e| e.to_string())?;
         // The page draws each frame's points (the odometry's own view).
         odo.record_detail = true;
-        Ok(VoSession {
-            id,
-            total,
-            poses,
-            camera,
-            odo,
-            matched: None,
-            rows: Vec::new(),
-            est: Vec::new(),
-            truth: Vec::new(),
-            t0,
-        })
+        Ok(VoSession { id, total, poses, camera, odo, matched: None, record: siftlab_core::vo::Record::default(), t0 })
     }
 
     /// The same session tracking with `strategy`'s matches instead of LK.
@@ -135,7 +116,7 @@ impl VoSession {
         mut features: Vec<siftlab_core::sift::Features>,
     ) -> Result<Option<Box<siftlab_core::vo::StepDetail>>, String> {
         use siftlab_core::vo::{sift_detector, MatchedOdometry, Odometry, StepDetail};
-        if frame >= self.est.len() || from > frame {
+        if frame >= self.record.len() || from > frame {
             return Err(format!("frame {frame} is not among the run's frames so far"));
         }
         let gt = |i: usize| self.poses.get(i);
@@ -178,9 +159,8 @@ impl VoSession {
     fn frame(&mut self, i: usize, input: Input, post: &dyn Fn(VoReply)) -> Result<(), String> {
         use siftlab_core::dataset::position;
         use siftlab_core::render::{encode_png, trajectory_window, TrajectoryStyle};
-        use siftlab_core::vo::ate_rmse;
-        if i != self.est.len() || i >= self.total {
-            return Err(format!("frame {i} arrived out of order (expected frame {})", self.est.len()));
+        if i != self.record.len() || i >= self.total {
+            return Err(format!("frame {i} arrived out of order (expected frame {})", self.record.len()));
         }
         let decode = |bytes: &[u8]| GrayImage::decode(bytes).map_err(|e| format!("frame {i}: {e}"));
         let gt = self.poses.get(i);
@@ -195,12 +175,8 @@ impl VoSession {
         .map_err(|e| e.to_string())?;
         let mut step = step;
         let detail = step.detail.take();
-        self.rows.push(siftlab_core::vo::pose_row(&step.rotation, &step.position));
+        self.record.push(&step);
         let gt = step.gt_position.or_else(|| self.poses.get(i).map(position));
-        self.est.push(step.position);
-        if let Some(g) = gt {
-            self.truth.push(g);
-        }
         post(VoReply::Step {
             id: self.id,
             frame: i as u32,
@@ -211,14 +187,12 @@ impl VoSession {
             detail,
         });
         if i + 1 == self.total {
-            let ate = ate_rmse(&self.est, &self.truth).map_err(|e| e.to_string())?;
-            let style = TrajectoryStyle::default();
-            let png = encode_png(&trajectory_window(&self.truth, &self.est, &style)).map_err(|e| e.to_string())?;
-            let gt = &self.poses[..self.rows.len()];
-            let metrics = siftlab_core::vo::evaluate(&self.rows, gt).map_err(|e| e.to_string())?;
-            post(VoReply::Metrics { id: self.id, metrics: metrics.to_array() });
-            let kitti = siftlab_core::vo::kitti_rows_text(&self.rows);
-            post(VoReply::Done { id: self.id, ate, png, ms: now_ms() - self.t0, kitti });
+            let end = self.record.finish(&self.poses).map_err(|e| e.to_string())?;
+            let window = trajectory_window(&end.truth, &self.record.positions(), &TrajectoryStyle::default());
+            let png = encode_png(&window).map_err(|e| e.to_string())?;
+            post(VoReply::Metrics { id: self.id, metrics: end.metrics.to_array() });
+            let kitti = siftlab_core::vo::kitti_text(self.record.poses());
+            post(VoReply::Done { id: self.id, ate: end.ate, png, ms: now_ms() - self.t0, kitti });
         }
         Ok(())
     }

@@ -70,20 +70,12 @@ impl RunResult {
     }
 }
 
-/// The line the CLI prints under its metrics, for the first `n` true poses:
-/// how many segments the KITTI figures rest on, and the true path's length
-/// ("KITTI metric: 2 segments of 100 m (true path 109.9 m)").
-pub fn kitti_note(poses: &[siftlab_core::dataset::PoseRow]) -> String {
-    use siftlab_core::dataset::{dist3, position};
-    use siftlab_core::vo::{describe_kitti_segments, kitti_segments};
-    let path: f64 = poses.windows(2).map(|w| dist3(&position(&w[0]), &position(&w[1]))).sum();
-    format!("KITTI metric: {} (true path {path:.1} m)", describe_kitti_segments(&kitti_segments(poses)))
-}
-
-/// [`kitti_note`] from the poses file's text, for frames 0 … n − 1.
+/// The line the CLI prints under its metrics (`vo::kitti_line`: the
+/// segments the KITTI figures rest on and the true path's length), from the
+/// poses file's text, for frames 0 … n − 1.
 pub fn kitti_note_text(poses: &str, n: usize) -> Option<String> {
     let rows = siftlab_core::dataset::parse_poses(poses).ok()?;
-    (rows.len() >= n).then(|| kitti_note(&rows[..n]))
+    (rows.len() >= n).then(|| siftlab_core::vo::kitti_line(&rows[..n]))
 }
 
 /// One row of the metrics table: run, ATE, aligned ATE, RPE (m, °), KITTI

@@ -3,14 +3,12 @@
 use super::manual::ManualExamples;
 use crate::model::frameset::describe_ids;
 use crate::model::lab::{Lab, Source, Which};
+use crate::page::file_input::{dropped_file, picked_files, take_picked_file};
 use crate::platform::now_ms;
-use crate::services::loading::{self, frame_path};
+use crate::services::loading;
+use crate::services::sources::frame_path;
 use leptos::prelude::*;
 use wasm_bindgen::JsCast;
-
-fn first_file(input: &web_sys::HtmlInputElement) -> Option<web_sys::File> {
-    input.files().and_then(|f| f.get(0))
-}
 
 /// One frame slot: a file picker that also accepts a dropped file.
 #[component]
@@ -35,9 +33,8 @@ fn FrameSlot(which: Which, testid: &'static str) -> impl IntoView {
             }
             on:dragleave=move |_| over.set(false)
             on:drop=move |ev: web_sys::DragEvent| {
-                ev.prevent_default();
                 over.set(false);
-                if let Some(f) = ev.data_transfer().and_then(|d| d.files()).and_then(|f| f.get(0)) {
+                if let Some(f) = dropped_file(&ev) {
                     loading::load_file(lab, which, f);
                 }
             }
@@ -49,12 +46,9 @@ fn FrameSlot(which: Which, testid: &'static str) -> impl IntoView {
                     accept="image/png,image/jpeg,.png,.jpg,.jpeg"
                     data-testid=testid
                     on:change=move |ev| {
-                        let input: web_sys::HtmlInputElement = event_target(&ev);
-                        if let Some(f) = first_file(&input) {
+                        if let Some(f) = take_picked_file(&ev) {
                             loading::load_file(lab, which, f);
                         }
-                        // Picking the same file again must fire `change` again.
-                        input.set_value("");
                     }
                 />
             </label>
@@ -113,11 +107,8 @@ pub fn Loader() -> impl IntoView {
                         node_ref=folder_ref
                         data-testid="folder"
                         on:change=move |ev| {
-                            let input: web_sys::HtmlInputElement = event_target(&ev);
-                            if let Some(files) = input.files() {
-                                let fid = frame_text.get_untracked().trim().parse().ok();
-                                loading::open_folder(lab, files, fid);
-                            }
+                            let fid = frame_text.get_untracked().trim().parse().ok();
+                            loading::open_folder(lab, picked_files(&ev), fid);
                         }
                     />
                 </label>

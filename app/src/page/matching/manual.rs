@@ -8,7 +8,8 @@ use crate::model::frameset::has_pair;
 use crate::model::lab::{Lab, Source, Which};
 use crate::model::lab_manual::{example_for, example_kind, example_threshold_box, verdict};
 use crate::model::parse::parse_feature;
-use crate::services::loading::{self, frame_path};
+use crate::services::loading;
+use crate::services::sources::frame_path;
 use leptos::prelude::*;
 use siftlab_core::manual::EXAMPLES;
 

@@ -12,7 +12,7 @@ mod result;
 
 pub use check::{Exercises, SelfCheck};
 pub use controls::Controls;
-pub use explain::{DescriptorGrid, DistanceChart, Explanation};
+pub use explain::{DistanceChart, Explanation};
 pub use frames::FramesView;
 pub use load::{Loader, Status};
 pub use manual::{apply_example, current_example, ManualComparison, ManualExamples};

@@ -7,8 +7,8 @@ use crate::model::lab::Source;
 use crate::model::odometry::{compare_runs, kitti_note_text, metric_cells, RunResult};
 use crate::platform::{blob_url, revoke};
 use crate::protocol::odometry::VoReply;
-use crate::services::loading;
 use crate::services::odometry;
+use crate::services::sources;
 use leptos::prelude::*;
 use siftlab_core::render::plot::figures::run_style;
 use siftlab_core::vo::TrajectoryMetrics;
@@ -24,7 +24,7 @@ struct Ctx {
     running: RwSignal<bool>,
     error: RwSignal<Option<String>>,
     /// The run's frames (read as it goes), poses and camera.
-    inputs: StoredValue<Option<loading::VoInputs>, LocalStorage>,
+    inputs: StoredValue<Option<sources::VoInputs>, LocalStorage>,
     /// Per run: its estimated poses (KITTI format) as a download, once done.
     poses_urls: RwSignal<Vec<Option<String>>>,
 }
@@ -123,7 +123,7 @@ pub fn OdometryCompare(source: Signal<Source>, count: Signal<Result<u32, String>
         ctx.running.set(true);
         let source = source.get_untracked();
         leptos::task::spawn_local(async move {
-            match loading::vo_inputs(&source, n).await {
+            match sources::vo_inputs(&source, n).await {
                 Ok(inputs) => {
                     ctx.inputs.set_value(Some(inputs));
                     start(ctx);

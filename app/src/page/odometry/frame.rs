@@ -13,8 +13,8 @@ use crate::model::odometry::frame::{
 use crate::page::legend::{Legend, Sw};
 use crate::platform::revoke;
 use crate::protocol::odometry::StepCounts;
-use crate::services::loading::FrameSource;
 use crate::services::odometry;
+use crate::services::sources::FrameSource;
 use leptos::prelude::*;
 use siftlab_core::render::palette::{hex, Style, INLIER, OUTLIER, REDETECTED, SKY_BLUE, TRACKERS};
 use siftlab_core::vo::StepDetail;

@@ -19,9 +19,9 @@ use crate::model::odometry::{
 use crate::model::plot::{percent, vo_done_text, vo_progress_text};
 use crate::platform::{blob_url, revoke};
 use crate::protocol::odometry::{StepCounts, VoReply};
-use crate::services::loading;
 use crate::services::odometry;
 use crate::services::sift_pool;
+use crate::services::sources;
 use compare::OdometryCompare;
 use figures::OdometryFigures;
 use frame::{FrameDetail, OdometryFrameView};
@@ -77,7 +77,7 @@ pub fn OdometryView() -> impl IntoView {
     let tracker_run = RwSignal::new(Tracker::Lk);
     let metrics = RwSignal::new(None::<TrajectoryMetrics>);
     // Where the run reads its frames, frame 0's size, and the run's generation.
-    let frames = StoredValue::new_local(None::<loading::FrameSource>);
+    let frames = StoredValue::new_local(None::<sources::FrameSource>);
     let frame_size = RwSignal::new(None::<(u32, u32)>);
     let generation = StoredValue::new(0u32);
     // The run's ground-truth poses (the poses file's text), for the KITTI note.
@@ -129,7 +129,7 @@ pub fn OdometryView() -> impl IntoView {
         running.set(true);
         let source = lab.source.get_untracked();
         leptos::task::spawn_local(async move {
-            let inputs = match loading::vo_inputs(&source, n).await {
+            let inputs = match sources::vo_inputs(&source, n).await {
                 Ok(x) => x,
                 Err(e) => {
                     error.set(Some(e));

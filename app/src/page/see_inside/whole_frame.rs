@@ -15,17 +15,18 @@ use super::canvas2d::{context, put_rgba};
 use crate::model::frame::Frame;
 use crate::model::lab::Lab;
 use crate::model::plot::marker_paint;
-use crate::model::see_inside::{
-    chart_points, chart_x, chart_xmax, chart_xy, chart_y, counts_text, crossings_text, current, marker_points,
-    parse_px, rule_text, Inside,
+use crate::model::see_inside::tradeoff::{
+    chart_points, chart_x, chart_xmax, chart_xy, chart_y, crossings_text, marker_points,
 };
-use crate::model::whole_frame::{
-    clip_line, ends, filter_pairs, nearest_match, pick_of, step_pick, true_fundamental, verdict_text, Filter, Layout,
+use crate::model::see_inside::whole_frame::{
+    clip_line, counts_text, current, ends, filter_pairs, nearest_match, parse_px, pick_of, rule_text, step_pick,
+    true_fundamental, verdict_text, Filter, Layout,
 };
+use crate::model::see_inside::Inside;
 use crate::page::legend::{swatch, Legend, Sw};
 use crate::protocol::inside::SweepData;
 use crate::services::inside;
-use crate::services::loading;
+use crate::services::sources;
 use leptos::prelude::*;
 use nalgebra::Matrix3;
 use siftlab_core::matching::explain;
@@ -127,7 +128,7 @@ pub fn WholeFrameView() -> impl IntoView {
         fmat.set(None);
         status.set("reading the ground-truth poses".into());
         leptos::task::spawn_local(async move {
-            let poses = match loading::pair_poses(&source, fid).await {
+            let poses = match sources::pair_poses(&source, fid).await {
                 Ok(x) => x,
                 Err(e) => {
                     status.set(format!("{e}: counting without judging"));

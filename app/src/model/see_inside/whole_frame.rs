@@ -1,11 +1,13 @@
-//! The whole-frame view's plain logic: its two layouts, the correct / wrong
-//! filter, which match a click picks, stepping through matches with keys,
-//! the picked match (its descriptor distance, its Sampson distance to the
+//! The whole-frame view's plain logic: the Sampson threshold and the rule it
+//! states, the current strategy's matches and counts from the sweep, its two
+//! layouts, the correct / wrong filter, which match a click picks, stepping
+//! through matches with keys, the picked match (its descriptor distance, its Sampson distance to the
 //! true geometry and its epipolar line) and that line clipped to the frame.
 
 use nalgebra::Matrix3;
 use siftlab_core::dataset::PoseRow;
-use siftlab_core::matching::epipolar::{epipolar_line, fundamental, sampson};
+use siftlab_core::matching::epipolar::{epipolar_line, fundamental, sampson, Verdicts};
+use siftlab_core::matching::sweep::{range, Selected, Sweep};
 use siftlab_core::matching::{explain, Strategy};
 use siftlab_core::sift::{Features, KeyPoint};
 use siftlab_core::vo::Camera;
@@ -204,9 +206,65 @@ pub fn clip_line(l: [f64; 3], w: f64, h: f64) -> Option<((f64, f64), (f64, f64))
     (pts.len() >= 2).then(|| (pts[0], pts[1]))
 }
 
+/// The Sampson threshold typed by the user.
+pub fn parse_px(text: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v >= 0.0 => Ok(v),
+        _ => Err(format!("the epipolar threshold {text:?} must be a distance in pixels >= 0 (2 is usual)")),
+    }
+}
+
+/// The rule the view states, with the threshold in use.
+pub fn rule_text(px: f64) -> String {
+    format!(
+        "A match x₁ → x₂ is correct when its Sampson distance to the true epipolar geometry, \
+         |x₂ᵀFx₁| / √((Fx₁)₁² + (Fx₁)₂² + (Fᵀx₂)₁² + (Fᵀx₂)₂²), is at most {px} px, with \
+         F = K⁻ᵀ[t]ₓR K⁻¹ from the ground-truth poses ([R|t] = P_cur⁻¹·P_prev, KITTI 00's camera)."
+    )
+}
+
+/// The counts of the current strategy from the sweep, and its matches
+/// (query, train) with their verdicts.
+pub fn current<'s>(sweep: &'s Sweep, s: &Strategy) -> Result<(Verdicts, Selected<'s>), String> {
+    let kind = s.kind();
+    let curve = sweep.curve(kind);
+    let (pairs, ok) = match s.threshold() {
+        None => curve.all_matches(),
+        Some(t) => curve.matches_at(t).ok_or_else(|| {
+            format!("the whole-frame view covers dt thresholds up to {}: pick a lower one", range(kind).1)
+        })?,
+    };
+    let v = Verdicts { matches: pairs.len(), correct: ok.map(|o| o.iter().filter(|&&b| b).count()) };
+    Ok((v, (pairs, ok)))
+}
+
+/// "700 matches, 672 correct, precision 0.9600" (counts only without ground truth).
+pub fn counts_text(v: &Verdicts) -> String {
+    match (v.correct, v.precision()) {
+        (Some(c), Some(p)) => format!("{} matches, {c} correct, {} wrong, precision {p:.4}", v.matches, v.matches - c),
+        (Some(_), None) => "no matches".into(),
+        _ => format!("{} matches (no ground truth: frames picked one by one)", v.matches),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn px_parses() {
+        assert_eq!(parse_px(" 2.5 "), Ok(2.5));
+        assert!(parse_px("-1").is_err() && parse_px("x").is_err() && parse_px("inf").is_err());
+    }
+
+    #[test]
+    fn counts_read_like_the_cli() {
+        let v = Verdicts { matches: 700, correct: Some(672) };
+        assert_eq!(counts_text(&v), "700 matches, 672 correct, 28 wrong, precision 0.9600");
+        assert_eq!(counts_text(&Verdicts { matches: 0, correct: Some(0) }), "no matches");
+        assert!(counts_text(&Verdicts { matches: 5, correct: None }).starts_with("5 matches (no ground truth"));
+        assert!(rule_text(2.0).contains("at most 2 px"));
+    }
 
     fn kp(x: f32, y: f32) -> KeyPoint {
         KeyPoint { x, y, size: 2.0, angle: 0.0, response: 0.0, octave: 0 }
