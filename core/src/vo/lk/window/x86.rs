@@ -3,10 +3,21 @@
 //! interpolation and the pair sums, exact integer sums with OpenCV's f32
 //! order replayed only where a bound requires it (docs/fidelity.md §VO-2.4;
 //! the layout and the exactness rule are in `wide`).
+//!
+//! This file holds the AVX2 kernels and the helpers the others share; beside
+//! it, `x86/replay.rs` replays OpenCV's f32 order where a bound fails, and
+//! `x86/avx512.rs` is the AVX-512 BW mismatch.
 
 use super::wide::{self, Acc, Patch, Row, Win16};
 use super::{Deriv, Kernels, Level, WIN};
 use std::arch::x86_64::*;
+
+mod avx512;
+mod replay;
+
+pub use avx512::Avx512;
+pub(super) use replay::mismatch_lanes_replay;
+use replay::tensor_sums_replay;
 
 pub struct Avx2;
 
@@ -272,85 +283,6 @@ fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &m
     (sum(0), sum(1), sum(2))
 }
 
-/// OpenCV's tensor lanes L0..L3 and tail sums S of ΣX², ΣXY and ΣY² (in
-/// that order), in OpenCV's order (`wide::tensor_lanes_replay`,
-/// `wide::tail_replay`), the three sums at once: each row's block products
-/// as i32, converted to f32 (rounding as OpenCV's conversion does), split
-/// into columns B..B+3 and B+4..B+7 and added to the lanes in column order;
-/// the tail's five columns as vectors (X², XY, Y², 0) added in order.
-#[target_feature(enable = "avx2")]
-fn tensor_sums_replay(x: &Win16, y: &Win16) -> ([[f32; 4]; 3], [f32; 3]) {
-    // Row layout positions B, B+1, .. hold columns B, B+4, B+1, B+5, ...
-    let split = _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7);
-    let (mut lxx, mut lxy, mut lyy) = (_mm_setzero_ps(), _mm_setzero_ps(), _mm_setzero_ps());
-    let mut tail = _mm_setzero_ps();
-    let products =
-        |a: __m256i, b: __m256i| _mm256_permutevar8x32_ps(_mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b)), split);
-    for (xr, yr) in x.iter().zip(y) {
-        for block in [0, 8] {
-            let xv = _mm256_cvtepi16_epi32(load8(xr, block));
-            let yv = _mm256_cvtepi16_epi32(load8(yr, block));
-            let (pxx, pxy, pyy) = (products(xv, xv), products(xv, yv), products(yv, yv));
-            lxx = _mm_add_ps(_mm_add_ps(lxx, _mm256_castps256_ps128(pxx)), _mm256_extractf128_ps::<1>(pxx));
-            lxy = _mm_add_ps(_mm_add_ps(lxy, _mm256_castps256_ps128(pxy)), _mm256_extractf128_ps::<1>(pxy));
-            lyy = _mm_add_ps(_mm_add_ps(lyy, _mm256_castps256_ps128(pyy)), _mm256_extractf128_ps::<1>(pyy));
-        }
-        // Columns 16..23 (21..23 are scratch, never added).
-        let xv = _mm256_cvtepi16_epi32(load8(xr, 16));
-        let yv = _mm256_cvtepi16_epi32(load8(yr, 16));
-        let f = |a: __m256i, b: __m256i| _mm256_cvtepi32_ps(_mm256_mullo_epi32(a, b));
-        let (fxx, fxy, fyy) = (f(xv, xv), f(xv, yv), f(yv, yv));
-        // Transposed: term vector c = (X²(c), XY(c), Y²(c), 0).
-        let zero = _mm256_setzero_ps();
-        let a = _mm256_unpacklo_ps(fxx, fxy); // xx0 xy0 xx1 xy1 | xx4 xy4 ..
-        let b = _mm256_unpacklo_ps(fyy, zero); // yy0 0 yy1 0 | yy4 0 ..
-        let c = _mm256_unpackhi_ps(fxx, fxy); // xx2 xy2 xx3 xy3 | ..
-        let d = _mm256_unpackhi_ps(fyy, zero);
-        let t0 = _mm256_shuffle_ps::<0b01_00_01_00>(a, b);
-        let t1 = _mm256_shuffle_ps::<0b11_10_11_10>(a, b);
-        let t2 = _mm256_shuffle_ps::<0b01_00_01_00>(c, d);
-        let t3 = _mm256_shuffle_ps::<0b11_10_11_10>(c, d);
-        for t in [t0, t1, t2, t3] {
-            tail = _mm_add_ps(tail, _mm256_castps256_ps128(t));
-        }
-        tail = _mm_add_ps(tail, _mm256_extractf128_ps::<1>(t0));
-    }
-    let (mut out, mut t) = ([[0f32; 4]; 3], [0f32; 4]);
-    // SAFETY: each store writes 4 f32 into a [f32; 4]; unaligned stores.
-    unsafe {
-        for (o, l) in out.iter_mut().zip([lxx, lxy, lyy]) {
-            _mm_storeu_ps(o.as_mut_ptr(), l);
-        }
-        _mm_storeu_ps(t.as_mut_ptr(), tail);
-    }
-    (out, [t[0], t[1], t[2]])
-}
-
-/// OpenCV's T0..T3 (= P + Q: X of groups 0+2, Y of 0+2, X of 1+3, Y of
-/// 1+3) replayed from the stored J − T, for when a lanes bound fails.
-#[target_feature(enable = "avx2")]
-pub(super) fn mismatch_lanes_replay(p: &Patch) -> [f32; 4] {
-    let (mut acc_p, mut acc_q) = (_mm_setzero_ps(), _mm_setzero_ps());
-    for y in 0..WIN {
-        let (d, _) = load(&p.d[y]);
-        let (x, _) = load(&p.x[y]);
-        let (g, _) = load(&p.y[y]);
-        let ux = _mm256_madd_epi16(d, x);
-        let uy = _mm256_madd_epi16(d, g);
-        // Per block: P += (uX(B), uY(B), uX(B+1), uY(B+1)), Q += the next two.
-        let pv = _mm256_cvtepi32_ps(_mm256_unpacklo_epi32(ux, uy));
-        let qv = _mm256_cvtepi32_ps(_mm256_unpackhi_epi32(ux, uy));
-        acc_p = _mm_add_ps(acc_p, _mm256_castps256_ps128(pv));
-        acc_q = _mm_add_ps(acc_q, _mm256_castps256_ps128(qv));
-        acc_p = _mm_add_ps(acc_p, _mm256_extractf128_ps::<1>(pv));
-        acc_q = _mm_add_ps(acc_q, _mm256_extractf128_ps::<1>(qv));
-    }
-    let mut t = [0f32; 4];
-    // SAFETY: 4 f32 into a [f32; 4]; an unaligned store.
-    unsafe { _mm_storeu_ps(t.as_mut_ptr(), _mm_add_ps(acc_p, acc_q)) };
-    t
-}
-
 /// The first byte of the next image's window at (jx, jy) and the level's
 /// stride, with the one bounds check the kernels' raw reads rely on: rows
 /// 0 ..= 21 of the window, whose last 32 bytes end inside the padded level.
@@ -413,116 +345,6 @@ fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &Patch) -> f32 
         total.add(ad, (ones, tail_ones));
     });
     wide::abs_diff_total(&total.acc())
-}
-
-/// The mismatch with AVX-512 BW: a whole window row (block part, tail and
-/// the zero padding of `Row`) is one 32-lane vector, each 128-bit chunk
-/// doing what the AVX2 kernel's ymm and xmm halves do in that chunk: the
-/// same products, pair sums and packs, so the same integers.
-pub struct Avx512;
-
-/// `pairs_u8` as one vector: chunks 0–1 the block pairs, chunk 2 the tail
-/// pairs, chunk 3 zero (reads `p[0..32]`).
-///
-/// # Safety
-/// `p[0..32]` must be readable, and the CPU must have AVX-512 BW.
-#[target_feature(enable = "avx512bw,avx512f,avx2")]
-#[inline]
-unsafe fn pairs_u8_512(p: *const u8) -> (__m512i, __m512i) {
-    const Z: i8 = -128;
-    // SAFETY: the caller vouches for p[0..32]; unaligned loads.
-    let (lo, hi) = unsafe {
-        (
-            _mm256_loadu2_m128i(p.add(8) as *const __m128i, p as *const __m128i),
-            _mm_loadu_si128(p.add(16) as *const __m128i),
-        )
-    };
-    let hi = _mm256_castsi128_si256(hi);
-    let src = _mm512_inserti64x4::<1>(_mm512_castsi256_si512(lo), hi);
-    // Two shuffles of the four 128-bit chunks (chunk 3 first, as
-    // `_mm512_set_epi8` takes them), 32 bytes a line.
-    #[rustfmt::skip]
-    let ma = _mm512_set_epi8(
-        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, 4, Z, 3, Z, 3, Z, 2, Z, 2, Z, 1, Z, 1, Z, 0,
-        Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0, Z, 6, Z, 5, Z, 2, Z, 1, Z, 5, Z, 4, Z, 1, Z, 0);
-    #[rustfmt::skip]
-    let mb = _mm512_set_epi8(
-        Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, Z, 8, Z, 7, Z, 7, Z, 6, Z, 6, Z, 5, Z, 5, Z, 4,
-        Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2, Z, 8, Z, 7, Z, 4, Z, 3, Z, 7, Z, 6, Z, 3, Z, 2);
-    (_mm512_shuffle_epi8(src, ma), _mm512_shuffle_epi8(src, mb))
-}
-
-#[target_feature(enable = "avx512bw,avx512f,avx2")]
-#[inline]
-fn mix_512<const S: u32>(t: __m512i, b: __m512i, wt: __m512i, wb: __m512i) -> __m512i {
-    let v = _mm512_add_epi32(_mm512_madd_epi16(t, wt), _mm512_madd_epi16(b, wb));
-    _mm512_srai_epi32::<S>(_mm512_add_epi32(v, _mm512_set1_epi32(1i32 << (S - 1))))
-}
-
-/// Splits an i32 sum vector into `Acc`: lanes 0–7 the blocks, 8–11 the tail.
-#[target_feature(enable = "avx512bw,avx512f,avx2")]
-#[inline]
-fn acc_512(v: __m512i) -> Acc {
-    let mut lanes = [0i32; 16];
-    // SAFETY: 16 i32 into a [i32; 16]; an unaligned store.
-    unsafe { _mm512_storeu_si512(lanes.as_mut_ptr() as *mut _, v) };
-    let mut a = Acc::default();
-    a.blocks.copy_from_slice(&lanes[..8]);
-    a.tail.copy_from_slice(&lanes[8..12]);
-    a
-}
-
-#[target_feature(enable = "avx512bw,avx512f,avx2")]
-fn mismatch_512(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
-    let (src, stride) = window_start(next, jx, jy);
-    let wt = _mm512_set1_epi32((w[1] << 16) | (w[0] & 0xffff));
-    let wb = _mm512_set1_epi32((w[3] << 16) | (w[2] & 0xffff));
-    // SAFETY: a Row is 32 i16, exactly the 64 bytes loaded (unaligned).
-    let row = |r: &Row| unsafe { _mm512_loadu_si512(r.0.as_ptr() as *const _) };
-    let zero = _mm512_setzero_si512();
-    let (mut sx, mut sy, mut bx, mut by) = (zero, zero, zero, zero);
-    // SAFETY: rows 0 ..= 21 of the window, whose last 32 bytes end
-    // inside the padded level (`window_start` checked them).
-    let mut top = unsafe { pairs_u8_512(src) };
-    for y in 0..WIN {
-        // SAFETY: row y + 1 ≤ 21 of the same window (see above).
-        let bot = unsafe { pairs_u8_512(src.add((y + 1) * stride)) };
-        // Chunk 3 mixes zeros: (0 + 2^8) >> 9 = 0, so the padding stays 0.
-        let j = _mm512_packs_epi32(mix_512::<9>(top.0, bot.0, wt, wb), mix_512::<9>(top.1, bot.1, wt, wb));
-        top = bot;
-        let d = _mm512_sub_epi16(j, row(&p.t[y]));
-        // SAFETY: the 64 bytes of the row p.d[y] (unaligned store).
-        unsafe { _mm512_storeu_si512(p.d[y].0.as_mut_ptr() as *mut _, d) };
-        sx = _mm512_add_epi32(sx, _mm512_madd_epi16(d, row(&p.x[y])));
-        sy = _mm512_add_epi32(sy, _mm512_madd_epi16(d, row(&p.y[y])));
-        let ad = _mm512_abs_epi16(d);
-        bx = _mm512_add_epi32(bx, _mm512_madd_epi16(ad, row(&p.ax[y])));
-        by = _mm512_add_epi32(by, _mm512_madd_epi16(ad, row(&p.ay[y])));
-    }
-    let (sx, sy, bx, by) = (acc_512(sx), acc_512(sy), acc_512(bx), acc_512(by));
-    wide::finish_mismatch(p, &sx, &sy, &bx, &by, |p| mismatch_lanes_replay(p))
-}
-
-impl Kernels for Avx512 {
-    type Patch = Patch;
-
-    // Only the mismatch differs from the AVX2 kernels (an AVX-512 BW CPU has AVX2).
-    #[inline(always)]
-    fn load_patch(prev: &Level, deriv: &Deriv, ix: i32, iy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32, f32) {
-        Avx2::load_patch(prev, deriv, ix, iy, w, p)
-    }
-
-    #[inline(always)]
-    fn mismatch(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> (f32, f32) {
-        // SAFETY: this kernel set is only used on AVX-512 BW CPUs (run_job
-        // checks), the features the function enables.
-        unsafe { mismatch_512(next, jx, jy, w, p) }
-    }
-
-    #[inline(always)]
-    fn abs_diff_sum(next: &Level, jx: i32, jy: i32, w: &[i32; 4], p: &mut Patch) -> f32 {
-        Avx2::abs_diff_sum(next, jx, jy, w, p)
-    }
 }
 
 impl Kernels for Avx2 {
