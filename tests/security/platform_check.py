@@ -12,7 +12,7 @@ Per case and platform, a fresh folder laid out as the platform lays out its cont
     /autograder/results/  (results.json)            /grade/results/    (results.json)
 
 and the entrypoint (run_autograder, run_grader) runs as root in bubblewrap standing for the
-container: the host's
+container (platform_sim.py): the host's
 files read-only, that folder bound at /autograder, a private /tmp and /dev, no network, its
 own PID namespace, **bwrap masked** (a file of nothing at its path: Docker's default profile
 forbids the namespaces it needs), so siftlab runs its container tier; in a cgroup holding it
@@ -52,6 +52,8 @@ import sys
 import tempfile
 import time
 
+from platform_sim import Cgroup, container_argv
+
 REPO = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 FIXTURES = os.path.join(REPO, "tests", "fixtures", "mark")
 DATASET = os.path.join(REPO, "www", "demo", "MyKITTI")
@@ -65,7 +67,6 @@ LAYOUT = {
     "prairielearn": {"bundle": "siftlab", "student": "grade/student", "results": "grade/results",
                      "mounts": ["siftlab", "grade"], "entry": "/siftlab/run_grader"},
 }
-MEMORY = 768 << 20
 TASKS = ["dt", "nn", "nndr", "matching_info"]
 
 
@@ -80,67 +81,6 @@ def digest_tree(root):
                 with open(p, "rb") as fh:
                     out[os.path.relpath(p, root)] = hashlib.sha256(fh.read()).hexdigest()
     return out
-
-
-class Cgroup:
-    """768 MB and half a CPU for one case, where this process may make a cgroup."""
-
-    def __init__(self, name):
-        self.dirs, self.memory_dir = [], None
-        own = open("/proc/self/cgroup").read().splitlines()
-        v2 = os.path.exists("/sys/fs/cgroup/cgroup.controllers")
-        if v2:
-            rel = [l.split(":", 2)[2] for l in own if l.startswith("0::")][0].lstrip("/")
-            d = os.path.join("/sys/fs/cgroup", rel, name)
-            os.mkdir(d)
-            self.dirs.append(d)
-            self._set(d, "memory.max", str(MEMORY))
-            self._set(d, "memory.swap.max", "0", optional=True)
-            self._set(d, "cpu.max", "50000 100000")
-            self.memory_dir, self.peak = d, "memory.peak"
-        else:
-            for ctrl in ("memory", "cpu"):
-                rel = [l.split(":", 2)[2] for l in own if ctrl in l.split(":")[1].split(",")][0].lstrip("/")
-                d = os.path.join("/sys/fs/cgroup", ctrl, rel, name)
-                os.mkdir(d)
-                self.dirs.append(d)
-                if ctrl == "memory":
-                    self._set(d, "memory.limit_in_bytes", str(MEMORY))
-                    self._set(d, "memory.memsw.limit_in_bytes", str(MEMORY), optional=True)
-                    self.memory_dir, self.peak = d, "memory.max_usage_in_bytes"
-                else:
-                    self._set(d, "cpu.cfs_period_us", "100000")
-                    self._set(d, "cpu.cfs_quota_us", "50000")
-
-    @staticmethod
-    def _set(d, f, v, optional=False):
-        try:
-            with open(os.path.join(d, f), "w") as fh:
-                fh.write(v)
-        except OSError:
-            if not optional:
-                raise
-
-    def join(self):
-        # In the child before exec: everything the container starts is inside.
-        for d in self.dirs:
-            with open(os.path.join(d, "cgroup.procs"), "w") as fh:
-                fh.write("0")
-
-    def peak_bytes(self):
-        try:
-            return int(open(os.path.join(self.memory_dir, self.peak)).read())
-        except (OSError, ValueError):
-            return -1
-
-    def remove(self):
-        for d in self.dirs:
-            for _ in range(50):
-                try:
-                    os.rmdir(d)
-                    break
-                except OSError:
-                    time.sleep(0.1)
 
 
 def reference(siftlab, variant, n, seed):
@@ -172,25 +112,10 @@ def run_case(platform, variant, bundle, siftlab, n, seed, python, keep, control=
     for d, _, _ in os.walk(base):
         os.chmod(d, 0o755)
     before = digest_tree(src)
-    bwrap = shutil.which("bwrap")
-    # The host's top-level folders read-only (links as links) on bubblewrap's own root, so
-    # the platform's folders can be made there.
-    cmd = ["bwrap"]
-    for name in sorted(os.listdir("/")):
-        path = "/" + name
-        if name in ("proc", "dev", "tmp", "run") or name in lay["mounts"]:
-            continue
-        if os.path.islink(path):
-            cmd += ["--symlink", os.readlink(path), path]
-        elif os.path.isdir(path):
-            cmd += ["--ro-bind", path, path]
-    for m in lay["mounts"]:
-        cmd += ["--bind", os.path.join(base, m), "/" + m]
-    cmd += ["--dev", "/dev", "--proc", "/proc", "--tmpfs", "/tmp", "--tmpfs", "/run",
-            "--tmpfs", "/var/tmp", "--ro-bind", "/dev/null", bwrap,
-            "--unshare-net", "--unshare-pid", "--unshare-ipc", "--unshare-uts", "--die-with-parent",
-            "--setenv", "SIFTLAB_PYTHON", python, "--",
-            "/bin/sh", "-c", lay["entry"] + "; echo \"entrypoint: $?\" >&2; sleep 2"]
+    # The platform's folders bound over the host's (read-only) on bubblewrap's own root.
+    cmd = container_argv(["/bin/sh", "-c", lay["entry"] + "; echo \"entrypoint: $?\" >&2; sleep 2"],
+                         binds=[(os.path.join(base, m), "/" + m) for m in lay["mounts"]],
+                         setenv=[("SIFTLAB_PYTHON", python)])
     group = Cgroup("siftlab-platform-%d-%s-%s%s" % (os.getpid(), platform, variant.replace("/", "-"),
                                                    "-control" if control else ""))
     t0 = time.time()
