@@ -4,7 +4,7 @@
 
 use super::super::wide::{Patch, Win16};
 use super::super::WIN;
-use super::{load, load8};
+use super::rows::{load, load8};
 use std::arch::x86_64::*;
 
 /// OpenCV's tensor lanes L0..L3 and tail sums S of ΣX², ΣXY and ΣY² (in
