@@ -244,6 +244,67 @@ impl Drop for Cgroup {
     }
 }
 
+/// The CPU count of the cgroup siftlab itself runs in, read-only: what a
+/// container's processes have used where siftlab cannot make a cgroup of
+/// its own (Docker's read-only /sys). The container tier marks one student
+/// at a time, so that count less siftlab's own CPU is the student's, reaped
+/// children included (a process tree from /proc loses them).
+#[derive(Clone, Debug)]
+pub struct Enclosing {
+    file: PathBuf,
+    v2: bool,
+}
+
+impl Enclosing {
+    /// siftlab's own cgroup's CPU file, if it can be read here. In a
+    /// container the hierarchy is often mounted at the container's own
+    /// cgroup, so /proc/self/cgroup's path is not below the mount: then the
+    /// mount's root is that cgroup.
+    pub fn find() -> Option<Enclosing> {
+        let own = std::fs::read_to_string("/proc/self/cgroup").ok()?;
+        let root = Path::new("/sys/fs/cgroup");
+        let (mount, path, file, v2) = if root.join("cgroup.controllers").exists() {
+            let path = own.lines().find_map(|l| l.strip_prefix("0::"))?;
+            (root.to_path_buf(), path, "cpu.stat", true)
+        } else {
+            let path = own
+                .lines()
+                .filter_map(|l| l.split_once(':').and_then(|(_, rest)| rest.split_once(':')))
+                .find(|(list, _)| list.split(',').any(|x| x == "cpuacct"))
+                .map(|(_, p)| p)?;
+            (std::fs::canonicalize(root.join("cpuacct")).ok()?, path, "cpuacct.usage", false)
+        };
+        [mount.join(path.trim_start_matches('/')), mount]
+            .into_iter()
+            .map(|d| Enclosing { file: d.join(file), v2 })
+            .find(|e| e.usage().is_some())
+    }
+
+    /// CPU seconds every process of the cgroup has used, reaped ones included.
+    fn usage(&self) -> Option<f64> {
+        if self.v2 {
+            stat_field(&self.file, "usage_usec").map(|us| us as f64 * 1e-6)
+        } else {
+            read_u64(&self.file).map(|ns| ns as f64 * 1e-9)
+        }
+    }
+
+    /// CPU seconds of the cgroup's processes other than siftlab's own.
+    pub fn others_cpu_seconds(&self) -> Option<f64> {
+        let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
+        // SAFETY: ts is a valid timespec to write.
+        unsafe {
+            libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts);
+        }
+        let own = ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9;
+        Some(self.usage()? - own)
+    }
+
+    pub fn file(&self) -> &Path {
+        &self.file
+    }
+}
+
 /// Whether this machine lets siftlab make a cgroup (one made and removed);
 /// if not, says why on stderr and what is measured instead.
 pub fn usable_or_say_why(memory_bytes: u64, processes: u64) -> bool {

@@ -1,10 +1,12 @@
 //! What a running harness has used (docs/marking.md, "The sandbox", time):
 //! from its cgroup where siftlab made one (every process that was ever in
-//! it, memory of every kind), else from its process tree in /proc; and how
+//! it, memory of every kind); in the container tier without one, CPU from
+//! the container's own cgroup less siftlab's; else from its process tree
+//! in /proc; and how
 //! long its threads waited for a CPU, which tells the machine's slowness
 //! from the file's own.
 
-use crate::cgroup::Cgroup;
+use crate::cgroup::{Cgroup, Enclosing};
 
 /// One reading.
 #[derive(Clone, Copy, Debug)]
@@ -25,15 +27,21 @@ pub struct Reading {
 pub struct Meter {
     pid: u32,
     cgroup: Option<Cgroup>,
+    /// The container's cgroup, where siftlab has none of its own for the harness.
+    enclosing: Option<Enclosing>,
     oom0: u64,
     /// The harness's interpreter: below bubblewrap's processes, once found.
     harness: std::cell::Cell<Option<u32>>,
 }
 
 impl Meter {
-    pub fn new(pid: u32, cgroup: Option<Cgroup>) -> Meter {
+    /// `enclosing`: the CPU count of the container siftlab runs in, used
+    /// when `cgroup` is `None` (only the container tier passes one: it marks
+    /// one student at a time, so nothing else of siftlab's runs there).
+    pub fn new(pid: u32, cgroup: Option<Cgroup>, enclosing: Option<Enclosing>) -> Meter {
         let oom0 = cgroup.as_ref().map_or(0, Cgroup::oom_kills);
-        Meter { pid, cgroup, oom0, harness: std::cell::Cell::new(None) }
+        let enclosing = if cgroup.is_some() { None } else { enclosing };
+        Meter { pid, cgroup, enclosing, oom0, harness: std::cell::Cell::new(None) }
     }
 
     /// What the harness has used; `None` once its first process has ended.
@@ -41,7 +49,10 @@ impl Meter {
         let (tree_cpu, tree_memory) = tree_usage(self.pid)?;
         let (run, wait) = process_schedstat(self.harness_pid());
         let Some(g) = &self.cgroup else {
-            return Some(Reading { cpu: tree_cpu, memory: tree_memory, wait, run, throttled: 0.0 });
+            // A child that burns CPU and is reaped outside the tree is gone
+            // from /proc but not from the container's count.
+            let cpu = self.enclosing.as_ref().and_then(Enclosing::others_cpu_seconds).unwrap_or(tree_cpu);
+            return Some(Reading { cpu, memory: tree_memory, wait, run, throttled: 0.0 });
         };
         Some(Reading {
             cpu: g.cpu_seconds().unwrap_or(tree_cpu),
@@ -214,6 +225,33 @@ mod tests {
         assert!(!machine_fault(&r(0.0, 0.0, 0.0), &r(1.0, 25.0, 20.0), 30.0, 9.0));
         // Waiting behind its own children (they took the CPU): the file.
         assert!(!machine_fault(&r(0.0, 0.0, 0.0), &r(1.0, 20.0, 0.0), 30.0, 9.9));
+    }
+
+    /// The container tier's count where siftlab has no cgroup of its own:
+    /// a child's CPU stays in the enclosing cgroup's count once it is
+    /// reaped (here by this test, so not in this process's own CPU).
+    #[test]
+    fn the_enclosing_cgroup_counts_a_reaped_child() {
+        let Some(e) = Enclosing::find() else { return }; // no readable cgroup here: nothing to test
+        let children_cpu = || {
+            let mut ru: libc::rusage = unsafe { std::mem::zeroed() };
+            // SAFETY: ru is a valid rusage to write.
+            unsafe {
+                libc::getrusage(libc::RUSAGE_CHILDREN, &mut ru);
+            }
+            ru.ru_utime.tv_sec as f64 + ru.ru_utime.tv_usec as f64 * 1e-6
+        };
+        let (before, reaped0) = (e.others_cpu_seconds().unwrap(), children_cpu());
+        let status = std::process::Command::new("sh")
+            .args(["-c", "i=0; while [ $i -lt 300000 ]; do i=$((i+1)); done"])
+            .status()
+            .unwrap();
+        assert!(status.success());
+        let child = children_cpu() - reaped0;
+        let grew = e.others_cpu_seconds().unwrap() - before;
+        // Other processes of the cgroup only add to it (this machine's other work).
+        assert!(child > 0.05, "the child burnt {child} s");
+        assert!(grew >= 0.9 * child, "grew {grew} s for a {child} s child");
     }
 
     #[test]

@@ -50,6 +50,8 @@ pub(crate) struct Runner {
     pub(crate) tier: Tier,
     /// Each harness gets a cgroup of its own (crate::cgroup).
     cgroups: bool,
+    /// The container's CPU count, where the container tier has no cgroup of its own.
+    enclosing: Option<crate::cgroup::Enclosing>,
 }
 
 impl Runner {
@@ -72,7 +74,18 @@ impl Runner {
             sandbox::pick_tier(&python, &dir.0)?
         };
         let cgroups = crate::cgroup::usable_or_say_why(sandbox::MEMORY_BYTES, sandbox::PROCESSES);
-        Ok(Runner { python, dir, tier, cgroups })
+        // In a container (Gradescope, PrairieLearn) /sys is read-only: the
+        // container's own cgroup still counts the CPU of children the
+        // kernel reaped, which a process tree loses (fixtures reaped_cpu,
+        // cpu_farm).
+        let enclosing = (tier == Tier::Container && !cgroups).then(crate::cgroup::Enclosing::find).flatten();
+        if let Some(e) = &enclosing {
+            eprintln!(
+                "siftlab: the container tier counts CPU time from the container's cgroup ({}), less siftlab's own",
+                e.file().display()
+            );
+        }
+        Ok(Runner { python, dir, tier, cgroups, enclosing })
     }
 
     /// Marks `source` on pairs computed beforehand (those of the plan of
@@ -157,7 +170,14 @@ impl Runner {
                 Step::Start => {
                     drop(harness.take());
                     setup.clear();
-                    harness = Some(Harness::start(&self.python, &self.dir.0, self.tier, job, self.cgroups)?);
+                    harness = Some(Harness::start(
+                        &self.python,
+                        &self.dir.0,
+                        self.tier,
+                        job,
+                        self.cgroups,
+                        self.enclosing.clone(),
+                    )?);
                     session.started();
                 }
                 Step::Send { id, line, limit, op, pair } => {
@@ -237,7 +257,14 @@ struct Harness {
 }
 
 impl Harness {
-    fn start(python: &Python, dir: &std::path::Path, tier: Tier, job: u32, cgroup: bool) -> Result<Harness> {
+    fn start(
+        python: &Python,
+        dir: &std::path::Path,
+        tier: Tier,
+        job: u32,
+        cgroup: bool,
+        enclosing: Option<crate::cgroup::Enclosing>,
+    ) -> Result<Harness> {
         let cgroup = if cgroup {
             let g = crate::cgroup::Cgroup::create(job, sandbox::MEMORY_BYTES, sandbox::PROCESSES);
             Some(g.map_err(|e| Error::InvalidArgument(format!("cannot make the sandbox's cgroup: {e}")))?)
@@ -297,7 +324,7 @@ impl Harness {
             }
         });
         let pid = child.id();
-        let meter = crate::meter::Meter::new(pid, cgroup);
+        let meter = crate::meter::Meter::new(pid, cgroup, enclosing);
         Ok(Harness {
             child,
             meter,

@@ -24,7 +24,7 @@ impl Runner {
         first: Outcome,
     ) -> Result<(Option<Harness>, Outcome)> {
         eprintln!("siftlab: a {op} request {why}: the machine's slowness, not the file's; running it again once");
-        let mut h = Harness::start(&self.python, &self.dir.0, self.tier, job, self.cgroups)?;
+        let mut h = Harness::start(&self.python, &self.dir.0, self.tier, job, self.cgroups, self.enclosing.clone())?;
         h.patient = true;
         let mut stray = 0;
         for (sid, sline, slimit, sop, _) in setup {
