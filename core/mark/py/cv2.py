@@ -10,19 +10,32 @@ in Python: `knnMatch` builds the knn request of docs/marking.md and hands it to 
 
 Anything else of cv2 raises AttributeError naming it. Descriptors are numpy float32 N x 128
 arrays when numpy imports, else `Descriptors`, a small read-only stand-in.
+
+This file holds the link to the host, BFMatcher, SIFT and norm. Its parts beside it hold the
+rest, and their classes and functions are cv2's: `_siftlab_cv2_base.py` (numpy, OpenCV's
+errors and conversions), `_siftlab_cv2_types.py` (KeyPoint, DMatch) and
+`_siftlab_cv2_descriptors.py` (descriptors, and their stand-in without numpy). The harness
+loads them first, from this folder.
 """
 
 import base64 as _base64
 import math as _math
 from itertools import repeat as _repeat
-from operator import attrgetter as _attrgetter
-import struct as _struct
 import sys as _sys
 
-try:
-    import numpy as _np
-except ImportError:  # the browser's Python (Pyodide without numpy)
-    _np = None
+from _siftlab_cv2_base import (_IN_BROWSER, _PACK_F, NumpyMissing, _assert_failed, _bad_argument, _f32,
+                               _int, _missing, _np, _numpy_missing, error)
+from _siftlab_cv2_types import DMatch, KeyPoint, KeyPoint_convert, _dmatch, _keypoint, _Match
+from _siftlab_cv2_descriptors import (_FLOAT32, DescriptorRow, Descriptors, _descriptors, _DType, _index,
+                                      _NeedsNumpy)
+
+# What the parts define is cv2's, as OpenCV's is: `<class 'cv2.KeyPoint'>`, and `cv2.error: ...`
+# as a traceback's last line (a marking's error message).
+for _o in (error, NumpyMissing, _numpy_missing, _f32, _int, _bad_argument, _assert_failed, _missing,
+           KeyPoint, _keypoint, KeyPoint_convert, DMatch, _Match, _DType, _NeedsNumpy, DescriptorRow,
+           Descriptors, _index, _descriptors):
+    _o.__module__ = __name__
+del _o
 
 __version__ = "4.8.0"
 
@@ -32,391 +45,6 @@ NORM_L2 = 4
 NORM_L2SQR = 5
 NORM_HAMMING = 6
 NORM_HAMMING2 = 7
-
-_PACK_F = _struct.Struct("<f")
-_IN_BROWSER = _sys.platform == "emscripten"
-
-
-class error(Exception):
-    """OpenCV's exception class (cv2.error)."""
-
-
-class NumpyMissing(ImportError):
-    """Raised where the student's code needs numpy and this Python has none."""
-
-
-def _numpy_missing(what):
-    where = "the browser's Python" if _IN_BROWSER else "this python3"
-    return NumpyMissing("this needs numpy, which %s does not have: %s" % (where, what))
-
-
-def _f32(value, name="value"):
-    """OpenCV's float conversion: a real number, stored as float32 (read back widened)."""
-    if value is None:
-        return 0.0
-    if isinstance(value, (str, bytes)) or isinstance(value, complex):
-        raise TypeError("Argument '%s' can't be treated as a float" % name)
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise TypeError("Argument '%s' can't be treated as a float" % name) from None
-    if v != v or v in (_math.inf, -_math.inf):
-        return v
-    try:
-        return _PACK_F.unpack(_PACK_F.pack(v))[0]
-    except OverflowError:  # beyond float32's range: OpenCV's cast gives an infinity
-        return _math.copysign(_math.inf, v)
-
-
-def _int(value, name="value"):
-    """OpenCV's int conversion: an integer (not bool, not float) that fits a C int."""
-    if isinstance(value, bool) or (_np is not None and isinstance(value, _np.bool_)):
-        raise TypeError("Argument '%s' must be integer, not bool" % name)
-    if isinstance(value, int):
-        v = value
-    elif _np is not None and isinstance(value, _np.integer):
-        v = int(value)
-    else:
-        raise TypeError("Argument '%s' is required to be an integer" % name)
-    if not -2 ** 31 <= v < 2 ** 31:
-        raise TypeError("integer won't fit into a C int")
-    return v
-
-
-def _bad_argument(fn, msg):
-    return error("OpenCV(4.8.0) :-1: error: (-5:Bad argument) in function '%s'\n"
-                 "> Overload resolution failed:\n>  - %s\n" % (fn, msg))
-
-
-def _assert_failed(cond, fn, where="matchers.cpp"):
-    return error("OpenCV(4.8.0) %s: error: (-215:Assertion failed) %s in function '%s'\n"
-                 % (where, cond, fn))
-
-
-# --- KeyPoint ------------------------------------------------------------------------------
-
-class KeyPoint:
-    """cv2.KeyPoint: pt (float32 x, y as a tuple of floats), size, angle, response (float32),
-    octave, class_id (int)."""
-
-    __slots__ = ("pt", "size", "angle", "response", "octave", "class_id")
-
-    def __init__(self, x=None, y=None, size=None, angle=-1, response=0, octave=0, class_id=-1):
-        if x is None and y is None and size is None:
-            object.__setattr__(self, "pt", (0.0, 0.0))
-            object.__setattr__(self, "size", 0.0)
-        else:
-            if size is None:
-                raise _bad_argument("KeyPoint", "KeyPoint() missing required argument 'size' (pos 3)")
-            try:
-                object.__setattr__(self, "pt", (_f32(x, "x"), _f32(y, "y")))
-                object.__setattr__(self, "size", _f32(size, "size"))
-            except TypeError as e:
-                raise _bad_argument("KeyPoint", str(e)) from None
-        self.angle = angle
-        self.response = response
-        self.octave = octave
-        self.class_id = class_id
-
-    def __setattr__(self, name, value):
-        if name == "pt":
-            try:
-                x, y = value
-            except (TypeError, ValueError):
-                raise TypeError("Argument 'value' must be a tuple of 2 floats") from None
-            value = (_f32(x), _f32(y))
-        elif name in ("size", "angle", "response"):
-            value = _f32(value)
-        elif name in ("octave", "class_id"):
-            value = _int(value)
-        object.__setattr__(self, name, value)
-
-    def __repr__(self):
-        return "< cv2.KeyPoint %#x>" % id(self)
-
-    @staticmethod
-    def convert(keypoints, keypointIndexes=()):
-        return KeyPoint_convert(keypoints, keypointIndexes)
-
-    @staticmethod
-    def overlap(kp1, kp2):
-        raise AttributeError(_missing("KeyPoint.overlap"))
-
-
-def _keypoint(x, y, size, angle, response, octave):
-    """A KeyPoint from values that are float32 already (the host's)."""
-    k = KeyPoint.__new__(KeyPoint)
-    _set = object.__setattr__
-    _set(k, "pt", (x, y))
-    _set(k, "size", size)
-    _set(k, "angle", angle)
-    _set(k, "response", response)
-    _set(k, "octave", octave)
-    _set(k, "class_id", -1)
-    return k
-
-
-def KeyPoint_convert(keypoints, keypointIndexes=()):
-    """cv2.KeyPoint_convert(keypoints): an N x 2 float32 array of the points (numpy only)."""
-    if _np is None:
-        raise _numpy_missing("cv2.KeyPoint_convert returns a numpy array")
-    kps = list(keypoints)
-    idx = list(keypointIndexes) if keypointIndexes is not None else []
-    if idx:
-        kps = [kps[i] for i in idx]
-    return _np.array([k.pt for k in kps], dtype=_np.float32).reshape(-1, 2)
-
-
-# --- DMatch --------------------------------------------------------------------------------
-
-class DMatch:
-    """cv2.DMatch: queryIdx, trainIdx, imgIdx (int) and distance (float32, read as a float).
-
-    DMatch() is (-1, -1, -1, FLT_MAX); DMatch(q, t, d) has imgIdx -1, as OpenCV's; knnMatch's
-    matches have imgIdx 0. `==` is identity and `<` is not supported, as OpenCV's. Setting
-    an attribute converts as OpenCV does (int, or a float rounded to float32)."""
-
-    __slots__ = ("_q", "_t", "_i", "_d")
-
-    def __init__(self, *args, **kwargs):
-        names = ("_queryIdx", "_trainIdx", "_imgIdx", "_distance")
-        if not args and not kwargs:
-            q, t, i, d = -1, -1, -1, 3.4028234663852886e+38
-        else:
-            if len(args) > 4:
-                raise _bad_argument("DMatch", "DMatch() takes at most 4 arguments (%d given)" % len(args))
-            given = dict(zip(names if len(args) == 4 else ("_queryIdx", "_trainIdx", "_distance"), args))
-            for k, v in kwargs.items():
-                if k not in names or k in given:
-                    raise _bad_argument("DMatch", "DMatch() got an unexpected keyword argument '%s'" % k)
-                given[k] = v
-            for req in ("_queryIdx", "_trainIdx", "_distance"):
-                if req not in given:
-                    raise _bad_argument("DMatch", "DMatch() missing required argument '%s'" % req)
-            try:
-                q = _int(given["_queryIdx"], "_queryIdx")
-                t = _int(given["_trainIdx"], "_trainIdx")
-                i = _int(given.get("_imgIdx", -1), "_imgIdx")
-                d = _f32(given["_distance"], "_distance")
-            except TypeError as e:
-                raise _bad_argument("DMatch", str(e)) from None
-        self._q = q
-        self._t = t
-        self._i = i
-        self._d = d
-
-    def _set_q(self, v):
-        self._q = _int(v)
-
-    def _set_t(self, v):
-        self._t = _int(v)
-
-    def _set_i(self, v):
-        self._i = _int(v)
-
-    def _set_d(self, v):
-        self._d = _f32(v)
-
-    # attrgetter: reading runs no Python code (a dt call reads 2.25 million distances)
-    queryIdx = property(_attrgetter("_q"), _set_q)
-    trainIdx = property(_attrgetter("_t"), _set_t)
-    imgIdx = property(_attrgetter("_i"), _set_i)
-    distance = property(_attrgetter("_d"), _set_d)
-    del _set_q, _set_t, _set_i, _set_d
-
-    def __lt__(self, other):
-        return NotImplemented
-
-    __gt__ = __le__ = __ge__ = __lt__
-
-    def __repr__(self):
-        return "< cv2.DMatch %#x>" % id(self)
-
-
-class _Match(DMatch):
-    """The DMatch of the host's answers: built without conversions (the values are valid)."""
-
-    __slots__ = ()
-
-    def __init__(self, q, t, i, d):
-        self._q = q
-        self._t = t
-        self._i = i
-        self._d = d
-
-
-_Match.__name__ = _Match.__qualname__ = "DMatch"
-_dmatch = _Match
-
-
-# --- descriptors without numpy -------------------------------------------------------------
-
-class _DType(str):
-    """'float32', and equal to numpy's name for it."""
-
-    @property
-    def name(self):
-        return str(self)
-
-
-_FLOAT32 = _DType("float32")
-
-
-class _NeedsNumpy:
-    """Arithmetic and anything unknown on the stand-ins: a clear 'needs numpy' error."""
-
-    __slots__ = ()
-
-    def _nope(self, *args, **kwargs):
-        raise _numpy_missing("arithmetic on descriptors (%s)" % type(self).__name__)
-
-    __add__ = __radd__ = __sub__ = __rsub__ = __mul__ = __rmul__ = _nope
-    __truediv__ = __rtruediv__ = __pow__ = __neg__ = __abs__ = __matmul__ = __rmatmul__ = _nope
-    __lt__ = __le__ = __gt__ = __ge__ = _nope
-
-    def __bool__(self):
-        raise ValueError("The truth value of an array with more than one element is ambiguous. "
-                         "Use a.any() or a.all()")
-
-    def __getattr__(self, name):
-        if name.startswith("__"):
-            raise AttributeError(name)
-        raise _numpy_missing("%s.%s (the stand-in for numpy's array has len(), indexing, "
-                             "iteration, shape, dtype and tolist())" % (type(self).__name__, name))
-
-
-class DescriptorRow(_NeedsNumpy):
-    """One descriptor (128 float values) of a `Descriptors`, read-only."""
-
-    __slots__ = ("_b", "_o")
-
-    def __init__(self, data, offset):
-        self._b = data
-        self._o = offset
-
-    def __len__(self):
-        return 128
-
-    @property
-    def shape(self):
-        return (128,)
-
-    @property
-    def ndim(self):
-        return 1
-
-    @property
-    def size(self):
-        return 128
-
-    dtype = _FLOAT32
-
-    def __getitem__(self, j):
-        if isinstance(j, slice):
-            return [float(v) for v in self._b[self._o:self._o + 128][j]]
-        j = _index(j, 128, "descriptor")
-        return float(self._b[self._o + j])
-
-    def __iter__(self):
-        return iter([float(v) for v in self._b[self._o:self._o + 128]])
-
-    def tolist(self):
-        return [float(v) for v in self._b[self._o:self._o + 128]]
-
-    def __eq__(self, other):
-        if isinstance(other, DescriptorRow):
-            return self._b[self._o:self._o + 128] == other._b[other._o:other._o + 128]
-        return NotImplemented
-
-    __hash__ = None
-
-    def __repr__(self):
-        return "DescriptorRow(%s)" % self.tolist()
-
-
-class Descriptors(_NeedsNumpy):
-    """The stand-in for OpenCV's N x 128 float32 descriptor array when numpy is absent:
-    len(), rows by index (DescriptorRow) or slice (Descriptors), des[i, j], iteration,
-    shape, dtype ('float32'), tolist(); read-only. Values are whole numbers 0-255 kept as
-    bytes."""
-
-    __slots__ = ("_b", "_n")
-
-    def __init__(self, data, n):
-        self._b = bytes(data)
-        self._n = n
-
-    def __len__(self):
-        return self._n
-
-    @property
-    def shape(self):
-        return (self._n, 128)
-
-    @property
-    def ndim(self):
-        return 2
-
-    @property
-    def size(self):
-        return self._n * 128
-
-    dtype = _FLOAT32
-
-    def __getitem__(self, i):
-        if isinstance(i, tuple):
-            if len(i) == 2 and not isinstance(i[0], slice) and not isinstance(i[1], slice):
-                r = _index(i[0], self._n, "row")
-                return float(self._b[r * 128 + _index(i[1], 128, "column")])
-            raise _numpy_missing("indexing descriptors with %r" % (i,))
-        if isinstance(i, slice):
-            start, stop, step = i.indices(self._n)
-            if step != 1:
-                rows = range(start, stop, step)
-                return Descriptors(b"".join(self._b[r * 128:(r + 1) * 128] for r in rows), len(rows))
-            stop = max(stop, start)
-            return Descriptors(self._b[start * 128:stop * 128], stop - start)
-        r = _index(i, self._n, "row")
-        return DescriptorRow(self._b, r * 128)
-
-    def __iter__(self):
-        b = self._b
-        return iter([DescriptorRow(b, r * 128) for r in range(self._n)])
-
-    def tolist(self):
-        b = self._b
-        return [[float(v) for v in b[r * 128:(r + 1) * 128]] for r in range(self._n)]
-
-    def copy(self):
-        return Descriptors(self._b, self._n)
-
-    def __repr__(self):
-        return "Descriptors(%d x 128, float32)" % self._n
-
-
-def _index(i, n, what):
-    if isinstance(i, bool) or not isinstance(i, int):
-        if _np is not None and isinstance(i, _np.integer):
-            i = int(i)
-        elif hasattr(i, "__index__"):
-            i = i.__index__()
-        else:
-            raise TypeError("%s indices must be integers, not %s" % (what, type(i).__name__))
-    if i < 0:
-        i += n
-    if not 0 <= i < n:
-        raise IndexError("index %d is out of bounds for axis 0 with size %d" % (i, n))
-    return i
-
-
-def _descriptors(data, n):
-    """The harness's descriptors (bytes of n x 128 whole numbers) as detectAndCompute gives
-    them: None when there are none, else float32 N x 128."""
-    if n == 0:
-        return None
-    if _np is not None:
-        return _np.frombuffer(data, dtype=_np.uint8).reshape(n, 128).astype(_np.float32)
-    return Descriptors(data, n)
 
 
 # --- the link to the host ------------------------------------------------------------------
@@ -725,11 +353,6 @@ def _flat(x):
         else:
             out.extend(_flat(v))
     return out
-
-
-def _missing(name):
-    return ("siftlab's cv2 has no cv2.%s: the lab's tasks need only BFMatcher, DMatch, KeyPoint "
-            "(and SIFT_create for the base class)" % name)
 
 
 def __getattr__(name):

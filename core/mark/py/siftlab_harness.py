@@ -17,6 +17,11 @@ sandbox as root) sets the uid and gid to N before any other work; `--path DIR` p
 The harness judges nothing: it never sees the expected values. It returns what the
 student's functions returned, encoded by type (docs/marking.md, "Typed values"), and siftlab
 compares outside this interpreter.
+
+Its parts are modules beside it, loaded from this folder as cv2 and its parts are:
+`_siftlab_harness_run.py` (running the student's code), `_siftlab_harness_values.py` (what it
+returned, as the replies carry it) and `_siftlab_harness_imports.py` (the lab's import rule,
+in place once it is loaded).
 """
 
 import os
@@ -38,25 +43,19 @@ if __name__ == "__main__":
 
 import base64
 import builtins
-import gc
 import importlib.util
 import io
 import json
 import linecache
-import math
-import operator
-import threading
-import traceback
 import types
-import array
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-STUDENT_FILE = "vision_tasks.py"
-MAX_OUTPUT = 4000  # characters of the student's printed output kept in a reply
 
 
 def _load_shim(name):
-    """Our cv2 / vision_tasks_base from this folder, whatever else sys.path holds."""
+    """One of our modules from this folder, whatever else sys.path holds (in the CLI, -I
+    leaves this folder off it): cv2 and its parts, vision_tasks_base, the harness's parts.
+    Each imports those it uses by name, so they load in that order."""
     spec = importlib.util.spec_from_file_location(name, os.path.join(HERE, name + ".py"))
     mod = importlib.util.module_from_spec(spec)
     sys.modules[name] = mod
@@ -64,6 +63,9 @@ def _load_shim(name):
     return mod
 
 
+for _part in ("_siftlab_cv2_base", "_siftlab_cv2_types", "_siftlab_cv2_descriptors"):
+    _load_shim(_part)
+del _part
 cv2 = _load_shim("cv2")
 _load_shim("vision_tasks_base")
 
@@ -102,131 +104,17 @@ def _host_bridge(request):
 cv2._host = _host_bridge
 
 
-# --- what the student's file may import ----------------------------------------------------
-# The lab's rule (for fidelity; the sandbox is what keeps a file in): the standard library,
-# cv2, numpy and vision_tasks_base. Checked on every route in: `import` and `__import__`
-# (builtins, also for exec with the real builtins), importlib.import_module and
-# importlib.__import__, and every module built from a spec (importlib.util's file loading
-# included), by name and by the file it comes from.
+# The harness's parts: running the student's code, and what it returns as the replies carry it.
+_load_shim("_siftlab_harness_run")
+_load_shim("_siftlab_harness_values")
+from _siftlab_harness_run import STUDENT_FILE, _Failure, _add_output, _error_reply, _run  # noqa: E402
+from _siftlab_harness_values import _check_matches, _describe, _dumps, _tname, _typed  # noqa: E402
 
-_LAB_MODULES = {"cv2", "numpy", "vision_tasks_base"}
-
-
-def _stdlib_names():
-    names = getattr(sys, "stdlib_module_names", None)
-    return frozenset(names) if names else None
-
-
-_STDLIB = _stdlib_names()
-
-
-def _is_stdlib(top):
-    if _STDLIB is not None:
-        return top in _STDLIB
-    if top in sys.builtin_module_names:
-        return True
-    import sysconfig
-    try:
-        spec = importlib.util.find_spec(top)
-    except (ImportError, ValueError):
-        return False
-    if spec is None or spec.origin is None:
-        return False
-    return _origin_allowed(spec.origin)
-
-
-def _allowed_roots():
-    import sysconfig
-    paths = sysconfig.get_paths()
-    roots = {os.path.realpath(paths[k]) for k in ("stdlib", "platstdlib") if k in paths}
-    roots.update(os.path.realpath(p) for p in sys.path if p.endswith(".zip"))
-    roots.add(os.path.realpath(HERE))
-    return tuple(r + os.sep for r in roots)
-
-
-_PACKAGE_DIRS = ("site-packages", "dist-packages")
-
-
-def _origin_allowed(origin):
-    """A module's file is the standard library's (not a package installed beside it),
-    numpy's, or one of our shims."""
-    if not isinstance(origin, str) or not os.path.isabs(origin):
-        return True  # built-in, frozen, namespace
-    path = os.path.realpath(origin)
-    np = cv2._np
-    if np is not None and path.startswith(os.path.dirname(os.path.realpath(np.__file__)) + os.sep):
-        return True
-    parts = path.split(os.sep)
-    return path.startswith(_ROOTS) and not any(d in parts for d in _PACKAGE_DIRS)
-
-
-def _name_allowed(name):
-    top = name.partition(".")[0]
-    return top in _LAB_MODULES or _is_stdlib(top)
-
-
-def _refuse(name):
-    top = name.partition(".")[0]
-    raise ModuleNotFoundError(
-        "No module named '%s': the lab's machines have only Python's standard library, "
-        "cv2 (OpenCV) and numpy" % top, name=top)
-
-
-_MAIN_THREAD = threading.get_ident()
-_in_student = False
-
-
-def _gated():
-    """The rule holds while the student's code runs, and in any thread it started."""
-    return _in_student or threading.get_ident() != _MAIN_THREAD
-
-
-_real_import = builtins.__import__
-_bootstrap = importlib._bootstrap
-_real_gcd_import = _bootstrap._gcd_import
-_real_bootstrap_import = _bootstrap.__import__
-_real_module_from_spec = _bootstrap.module_from_spec
-
-
-def _guarded_import(name, globals=None, locals=None, fromlist=(), level=0):
-    if level == 0 and _gated() and not _name_allowed(name):
-        _refuse(name)
-    return _real_import(name, globals, locals, fromlist, level)
-
-
-def _guarded_gcd_import(name, package=None, level=0):
-    if level == 0 and _gated() and not _name_allowed(name):
-        _refuse(name)
-    return _real_gcd_import(name, package, level)
-
-
-def _guarded_bootstrap_import(name, globals=None, locals=None, fromlist=(), level=0):
-    if level == 0 and _gated() and not _name_allowed(name):
-        _refuse(name)
-    return _real_bootstrap_import(name, globals, locals, fromlist, level)
-
-
-def _guarded_module_from_spec(spec):
-    if _gated():
-        name = getattr(spec, "name", "") or "?"
-        if not _name_allowed(name):
-            _refuse(name)
-        origin = getattr(spec, "origin", None)
-        if not _origin_allowed(origin):
-            raise ModuleNotFoundError(
-                "%s is not a module of Python's standard library, cv2 or numpy: the lab's machines "
-                "have only those" % (origin,), name=name)
-    return _real_module_from_spec(spec)
-
-
-# Computed before the gate is in place (it imports sysconfig).
-_ROOTS = _allowed_roots()
-builtins.__import__ = _guarded_import
-_bootstrap._gcd_import = _guarded_gcd_import
-_bootstrap.__import__ = _guarded_bootstrap_import
-importlib.__import__ = _guarded_bootstrap_import
-_bootstrap.module_from_spec = _guarded_module_from_spec
-importlib.util.module_from_spec = _guarded_module_from_spec
+# What the student's file may import: the lab's rule (standard library, cv2, numpy,
+# vision_tasks_base) on every route in, put in place by loading its module. It goes last, after
+# every import of the harness's own, and takes the real import functions now, before any of the
+# student's code runs.
+_load_shim("_siftlab_harness_imports")
 
 _student_builtins = builtins.__dict__
 
@@ -266,94 +154,6 @@ def _des_bytes(b64, n):
     if len(data) != 128 * n:
         raise ValueError("descriptors: %d bytes for %d keypoints (128 each)" % (len(data), n))
     return data
-
-
-# --- running the student's code ------------------------------------------------------------
-
-class _Failure(Exception):
-    def __init__(self, reply, exc=None):
-        Exception.__init__(self)
-        self.reply = reply
-        self.exc = exc
-
-
-def _error_reply(exc, kind):
-    """{"error": last traceback line + (vision_tasks.py, line N), "kind", "traceback"}."""
-    last = "".join(traceback.format_exception_only(type(exc), exc)).strip().splitlines()
-    msg = last[-1] if last else type(exc).__name__
-    if isinstance(exc, SyntaxError):
-        where = STUDENT_FILE if exc.lineno is None else "%s, line %d" % (STUDENT_FILE, exc.lineno)
-        msg = "%s: %s (%s)" % (type(exc).__name__, exc.msg, where)
-    frames = [f for f in traceback.extract_tb(exc.__traceback__) if f.filename == STUDENT_FILE]
-    if frames and not isinstance(exc, SyntaxError):
-        msg += " (%s, line %d)" % (STUDENT_FILE, frames[-1].lineno)
-    tb = "".join(traceback.format_list(frames[-20:])) + "\n".join(last)
-    return {"error": msg, "kind": kind, "traceback": tb}
-
-
-class _Capture(io.TextIOBase):
-    """The student's stdout/stderr: keeps the first MAX_OUTPUT characters (an endless loop
-    that prints must not fill the memory)."""
-
-    def __init__(self):
-        io.TextIOBase.__init__(self)
-        self.parts = []
-        self.size = 0
-        self.cut = False
-
-    def writable(self):
-        return True
-
-    def write(self, text):
-        if not isinstance(text, str):
-            raise TypeError("write() argument must be str, not %s" % type(text).__name__)
-        if self.size < MAX_OUTPUT:
-            self.parts.append(text[:MAX_OUTPUT - self.size])
-            self.size += len(self.parts[-1])
-        if self.size >= MAX_OUTPUT and len(text):
-            self.cut = self.cut or self.size + len(text) > MAX_OUTPUT
-        return len(text)
-
-    def getvalue(self):
-        return "".join(self.parts) + ("\n[...]" if self.cut else "")
-
-
-def _run(fn, args):
-    """fn(*args) with the student's prints captured; (value, output) or _Failure. A
-    KeyboardInterrupt (Pyodide's interrupt buffer, SIGINT in the CLI) ends the call with
-    kind "interrupted"."""
-    buf = _Capture()
-    saved = sys.stdout, sys.stderr, sys.stdin
-    sys.stdout = sys.stderr = buf
-    sys.stdin = io.StringIO("")
-    # No cyclic garbage collection during the call: a dt call makes millions of DMatch, and
-    # the collector's passes over them would cost more than the rest of the call.
-    gc_was_on = gc.isenabled()
-    gc.disable()
-    global _in_student
-    _in_student = True
-    try:
-        value = fn(*args)
-    except KeyboardInterrupt:
-        reply = _add_output({"error": "KeyboardInterrupt: the call was interrupted", "kind": "interrupted"}, buf)
-        raise _Failure(reply) from None
-    except BaseException as e:  # SystemExit too: the student's code must not end the harness
-        reply = _error_reply(e, "runtime")
-        _add_output(reply, buf)
-        raise _Failure(reply, e) from None
-    finally:
-        _in_student = False
-        sys.stdout, sys.stderr, sys.stdin = saved
-        if gc_was_on:
-            gc.enable()
-    return value, buf
-
-
-def _add_output(reply, buf):
-    text = buf.getvalue()
-    if text:
-        reply["output"] = text
-    return reply
 
 
 def _load(msg):
@@ -402,142 +202,6 @@ def _pair(msg):
     return {"ok": True}
 
 
-def _type_error(msg):
-    return _Failure({"error": msg, "kind": "type"})
-
-
-def _tname(v):
-    return type(v).__name__
-
-
-def _check_matches(fn, value, compact=False):
-    """The list of lists of DMatch as rows of (queryIdx, trainIdx, distance), or with
-    compact the {"n", "q", "t", "d"} of docs/marking.md (a wrong type: _Failure)."""
-    if type(value) is not list:
-        raise _type_error("%s must return a list (one list per query), got %s" % (fn, _tname(value)))
-    DM = cv2.DMatch
-    ours = {DM, cv2._Match}
-    if compact:
-        n, q, t, d = [], array.array("i"), array.array("i"), array.array("f")
-        gq, gt, gd = operator.attrgetter("_q"), operator.attrgetter("_t"), operator.attrgetter("_d")
-    else:
-        get = operator.attrgetter("_q", "_t", "_d")
-        out = []
-    for qi, row in enumerate(value):
-        if type(row) is not list and type(row) is not tuple:
-            raise _type_error("%s: the item for query %d is %s, not a list of DMatch"
-                              % (fn, qi, _tname(row)))
-        if not ours.issuperset(map(type, row)):
-            for j, m in enumerate(row):
-                if not isinstance(m, DM):
-                    raise _type_error("%s: item %d of query %d is %s, not a DMatch" % (fn, j, qi, _tname(m)))
-        if compact:
-            n.append(len(row))
-            q.extend(map(gq, row))
-            t.extend(map(gt, row))
-            d.extend(map(gd, row))
-        else:
-            out.append(list(map(get, row)))
-    if not compact:
-        return out
-    if sys.byteorder != "little":
-        q.byteswap()
-        t.byteswap()
-        d.byteswap()
-    enc = lambda a: base64.b64encode(a.tobytes()).decode("ascii")  # noqa: E731
-    return {"n": n, "q": enc(q), "t": enc(t), "d": enc(d)}
-
-
-def _finite(v):
-    """JSON has no infinities or NaN: those travel as the strings "inf", "-inf", "nan"."""
-    if isinstance(v, float) and not math.isfinite(v):
-        return "nan" if v != v else ("inf" if v > 0 else "-inf")
-    if isinstance(v, (list, tuple)):
-        return [_finite(x) for x in v]
-    if isinstance(v, dict):
-        return {k: _finite(x) for k, x in v.items()}
-    return v
-
-
-def _dumps(obj):
-    try:
-        return json.dumps(obj, allow_nan=False, separators=(",", ":"))
-    except ValueError:
-        return json.dumps(_finite(obj), allow_nan=False, separators=(",", ":"))
-
-
-# --- typed values (docs/marking.md, "Typed values") -----------------------------------------
-# matching_info's value goes to siftlab by type, and siftlab applies Python's == outside this
-# interpreter. Every conversion below is the base type's own (int.__int__, float.__float__,
-# tuple.__iter__, ...), so no method of the student's classes runs: a subclass is its base
-# value, tagged with its class name.
-
-MAX_DEPTH = 32
-MAX_NODES = 100000
-
-
-def _np_types():
-    np = cv2._np
-    if np is None:
-        return None, None
-    return np.generic, np.ndarray
-
-
-_NP_GENERIC, _NP_NDARRAY = _np_types()
-
-
-def _sub(t, base, out):
-    if t is not base:
-        out["sub"] = str.__str__(t.__name__) if isinstance(t.__name__, str) else "?"
-    return out
-
-
-def _enc(v, depth, budget):
-    budget[0] -= 1
-    t = type(v)
-    if budget[0] < 0:
-        return {"opaque": t.__name__, "why": "over %d items" % MAX_NODES}
-    if depth > MAX_DEPTH:
-        return {"opaque": t.__name__, "why": "nested over %d levels" % MAX_DEPTH}
-    if v is None:
-        return None
-    if t is bool:
-        return v is True
-    if issubclass(t, int):
-        i = int.__int__(v)
-        if t is not int:
-            return _sub(t, int, {"int": str(i)})
-        return i if -(1 << 63) <= i < (1 << 63) else {"int": str(i)}
-    if issubclass(t, float):
-        f = float.__float__(v)
-        if t is float and math.isfinite(f):
-            return f
-        return _sub(t, float, {"float": f if math.isfinite(f) else ("nan" if f != f else ("inf" if f > 0 else "-inf"))})
-    if issubclass(t, str):
-        x = str.__str__(v)
-        return x if t is str else _sub(t, str, {"str": x})
-    if issubclass(t, tuple):
-        return _sub(t, tuple, {"tuple": [_enc(x, depth + 1, budget) for x in tuple.__iter__(v)]})
-    if issubclass(t, list):
-        return _sub(t, list, {"list": [_enc(x, depth + 1, budget) for x in list(list.__iter__(v))]})
-    if _NP_GENERIC is not None and issubclass(t, _NP_GENERIC):
-        # A numpy scalar is its Python value (np.float32 widens exactly), as == sees it.
-        x = _NP_GENERIC.item(v)
-        if type(x) in (bool, int, float, str):
-            return _sub(t, t, {"np": t.__name__, "value": _enc(x, depth + 1, budget)})
-        return {"opaque": t.__name__}
-    if _NP_NDARRAY is not None and issubclass(t, _NP_NDARRAY):
-        return {"opaque": "ndarray", "shape": [int(n) for n in _NP_NDARRAY.__getattribute__(v, "shape")]}
-    return {"opaque": t.__name__ if isinstance(t.__name__, str) else "?"}
-
-
-def _typed(v):
-    try:
-        return _enc(v, 0, [MAX_NODES])
-    except Exception as e:  # a class whose layout lies about its base
-        return {"opaque": "?", "why": "%s: %s" % (type(e).__name__, e)}
-
-
 def _call(msg):
     vt = _state.vt
     if vt is None:
@@ -584,12 +248,6 @@ def _call(msg):
                                     % (what, want.__name__, _tname(part)), "kind": "type"}, buf)
         return _add_output({"ok": _typed((a, b, c))}, buf)
     return {"error": "unknown fn %r" % (fn,), "kind": "protocol"}
-
-
-def _describe(v):
-    if isinstance(v, (tuple, list)):
-        return "a %s of %d items" % (_tname(v), len(v))
-    return _tname(v)
 
 
 def _hello(msg):
