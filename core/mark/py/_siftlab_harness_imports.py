@@ -41,7 +41,6 @@ def _is_stdlib(top):
         return top in _STDLIB
     if top in sys.builtin_module_names:
         return True
-    import sysconfig
     try:
         spec = importlib.util.find_spec(top)
     except (ImportError, ValueError):

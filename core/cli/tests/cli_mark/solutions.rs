@@ -141,3 +141,42 @@ fn endless_loop_is_stopped_at_10_s() {
     assert!(took < Duration::from_secs(40), "marking took {took:?}");
     assert_eq!(o.status.code(), Some(1));
 }
+
+/// Every CPython from 3.8 this machine has (the system's, `python3.N` on
+/// PATH, pyenv's versions): a file importing standard-library modules that
+/// are not built into the interpreter loads and scores 20. Before 3.10 the
+/// harness's import rule decides "standard library" by the module's file;
+/// a stray `import sysconfig` inside that check went through the rule
+/// again and recursed until Python gave up, so on 3.8 and 3.9 such a file
+/// scored 0 (RecursionError at load).
+#[test]
+fn stdlib_imports_load_under_every_python_here() {
+    let mut pythons: Vec<std::path::PathBuf> = vec!["/usr/bin/python3".into()];
+    for minor in 8..=13 {
+        let name = format!("python3.{minor}");
+        if let Some(p) = std::env::var_os("PATH").and_then(|p| {
+            // pyenv's shims stand for versions that may not be selected:
+            // its versions are read below instead.
+            std::env::split_paths(&p).filter(|d| !d.ends_with("shims")).map(|d| d.join(&name)).find(|f| f.is_file())
+        }) {
+            pythons.push(p);
+        }
+        let pyenv = std::env::var_os("HOME").map(|h| std::path::PathBuf::from(h).join(".pyenv/versions"));
+        if let Some(entries) = pyenv.and_then(|d| std::fs::read_dir(d).ok()) {
+            pythons.extend(entries.flatten().map(|e| e.path().join("bin").join(&name)).filter(|f| f.is_file()));
+        }
+    }
+    pythons.sort();
+    pythons.dedup();
+    let source = format!("import glob, importlib, json\n{}", std::fs::read_to_string(fixture("good")).unwrap());
+    let file = crate::scratch_file("stdlib_imports", source.as_bytes());
+    for py in &pythons {
+        let env = [("SIFTLAB_PYTHON", py.to_str().unwrap())];
+        // Without the sandbox: a pyenv interpreter lives under the home
+        // folder, which the sandbox does not show.
+        let (o, _) = mark_with(&file, &["-n", "1", "--seed", "92", "--json", "--no-sandbox"], &env);
+        let r = report(&o);
+        assert_eq!(num(&r, "total"), 20.0, "{}:\n{}\n{}", py.display(), stdout(&o), stderr(&o));
+    }
+    eprintln!("stdlib imports: 20.00 under {pythons:?}");
+}
