@@ -135,13 +135,10 @@ def _plant(name, source):
     c["decoy"] = tempfile.mkdtemp(prefix="siftlab-mark-0-hostilecheck-", dir=TMP)
     # The marker's TMPDIR: its marking folder goes here, and must be gone at the end.
     c["scratch"] = tempfile.mkdtemp(prefix="siftlab-hostile-tmp-%s-" % name)
-    for fname in ("siftlab_harness.py", "cv2.py"):
-        src = os.path.join(REPO, "www", "py", fname)
-        if os.path.isfile(src):
-            shutil.copyfile(src, os.path.join(c["decoy"], fname))
-        else:
-            with open(os.path.join(c["decoy"], fname), "w") as f:
-                f.write("# decoy\n")
+    # The decoy holds what a real marking folder holds: the harness files (core/mark/py/).
+    py = os.path.join(REPO, "core", "mark", "py")
+    for fname in sorted(f for f in os.listdir(py) if f.endswith(".py")):
+        shutil.copyfile(os.path.join(py, fname), os.path.join(c["decoy"], fname))
     c["decoy_tree"] = _digests(c["decoy"])
     c["hashes"] = {c["student"]: watch.sha(c["student"]), other: watch.sha(other)}
     return c
