@@ -3,7 +3,7 @@
 #   - OpenCV single-thread: tests/benchmarks/bench_opencv.py (SIFT detect+compute, knnMatch k=2)
 #   - ours, natively: the criterion benches core/benches/{sift,matching}.rs, once pinned to
 #     one core (taskset -c 0, so the core's scoped threads see one CPU) and once on all cores
-#   - ours in headless Chromium: the wasm test core/tests/wasm_golden.rs prints its times
+#   - ours in headless Chromium: the wasm test core/tests/wasm_golden/ prints its times
 # and prints ours/OpenCV ratios. Targets (issue [1]): SIFT <= 0.5x OpenCV single-thread;
 # dt/nn/nndr over all 1500x1500 descriptor pairs <= 0.5x knnMatch(k=2).
 #

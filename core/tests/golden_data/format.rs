@@ -1,7 +1,7 @@
 //! The OpenCV goldens' files read from bytes: a `.sift` golden (format in
 //! `golden.rs`) and the SIMD width in `meta.json`. Shared by the native golden
 //! tests (through `golden_data`, which reads the files) and the browser test
-//! (`wasm_golden.rs`, which has no file system and includes their bytes).
+//! (`wasm_golden/`, which has no file system and includes their bytes).
 
 #![allow(dead_code)] // each test binary uses its own part
 

@@ -19,7 +19,7 @@ appSuite();
 // it on the same cases (seed and count in the link). One call per task in every engine: what
 // the browser adds to the CLI is Pyodide running the file and the worker's transport, and a
 // task's first call takes every path of both; the judge is siftlab-mark's, the CLI's own
-// code (cli_mark.rs marks more calls). Seed 1's first nndr call shows the inverted ratio.
+// code (core/cli/tests/cli_mark/ marks more calls). Seed 1's first nndr call shows the inverted ratio.
 const MARK_N = Number(process.env.E2E_MARK_N || 1);
 const MARKS = path.join(ROOT, 'tests/fixtures/mark');
 function cliMark(variant, n, seed) {

@@ -1,4 +1,4 @@
-// Included by the LK unit test (vo/lk) and the wasm test (core/tests/wasm_golden.rs).
+// Included by the LK unit test (vo/lk) and the wasm test (core/tests/wasm_golden/).
 /// calcOpticalFlowPyrLK(lk_prev.png, lk_next.png, ...) from the 4.8.0.76
 /// wheel (testdata/gen_goldens.py): input point, output x/y f32 bits,
 /// status, err f32 bits (status-1 points only; status-0 err is garbage).
