@@ -81,7 +81,8 @@ impl Runner {
         let enclosing = (tier == Tier::Container && !cgroups).then(crate::cgroup::Enclosing::find).flatten();
         if let Some(e) = &enclosing {
             eprintln!(
-                "siftlab: the container tier counts CPU time from the container's cgroup ({}), less siftlab's own",
+                "siftlab: in the container tier CPU time is read from the container's cgroup instead ({}, less \
+                 siftlab's own): children the kernel reaped are counted; memory stays per process tree",
                 e.file().display()
             );
         }
