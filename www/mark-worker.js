@@ -6,7 +6,9 @@
 // The page sends {id, op, line}: one request of docs/marking.md's protocol; the worker
 // answers {type: "markReply", id, line}. A call that runs too long is stopped by the page,
 // which terminates this worker and starts another (Python cannot be interrupted from
-// outside without cross-origin isolation).
+// outside without cross-origin isolation). The page also sends the request's limit: past it
+// (and a grace) the worker interrupts its own Python, since JavaScriptCore keeps a terminated
+// worker's WebAssembly running (an endless loop would hold a core until the page closes).
 //
 // The page starts this module from a `blob:` URL (`import "<this URL>"`), so the worker runs
 // under the page's Content-Security-Policy (connect-src 'self', no 'unsafe-eval'): whatever
@@ -62,6 +64,28 @@ function timeReference(py) {
   }
 }
 
+// The worker's own stop. Pyodide reads element 0 of its "interrupt buffer" every 50 of
+// CPython's eval-breaker checks (loop back-edges, calls) and raises the signal it finds there
+// (2: SIGINT, KeyboardInterrupt); it needs no SharedArrayBuffer when the reader is the worker
+// itself. Here the read is a getter on the worker's own clock: 0 until the request's deadline,
+// then 2 at every read (a student's `except BaseException` cannot make it stop asking).
+// The deadline runs from this worker's receipt of the request, so it never comes before the
+// page's, which runs from the sending. A call stopped this way gets no reply: the page's own
+// time-out decides (a reply after the limit counts as a time-out anyway:
+// core::mark::Session::outcome), so the verdict is the page's whichever clock fires first.
+// The page terminates a worker at the limit; this ends what an engine leaves running, at once
+// (a loop left for a grace slowed the next start's speed measurement 2.2x in WebKit).
+let deadline = Infinity;
+let overran = false;
+const STOP = {
+  get 0() {
+    if (performance.now() <= deadline) return 0;
+    overran = true;
+    return 2;
+  },
+  set 0(_) { /* Pyodide clears the slot after each read: the getter decides alone */ },
+};
+
 async function start() {
   const t0 = performance.now();
   // The SIMD128 build: it runs in every engine, and k-NN needs no relaxed SIMD. Its start
@@ -74,6 +98,8 @@ async function start() {
     stdout: (s) => console.log('[python]', s),
     stderr: (s) => console.warn('[python]', s),
   });
+  // Before the reference workload: what it times includes the reads (one per 50 checks).
+  py.setInterruptBuffer(STOP);
   for (const f of FILES) {
     const r = await fetch(new URL(`./py/${f}`, import.meta.url));
     if (!r.ok) throw new Error(`py/${f}: HTTP ${r.status}`);
@@ -96,15 +122,23 @@ ready.then(
 );
 
 onmessage = async (ev) => {
-  const { id, op, line } = ev.data;
+  const { id, op, line, limit } = ev.data;
+  if (overran) return; // stopped past a deadline: the page has ended this worker
   let reply;
   try {
     const { wasm, harness } = await ready;
     // A pair's features are kept on both sides: Python's copy for the student's code,
     // the matcher's for knnMatch requests that name them ("K/1", "K/2").
     if (op === 'pair') wasm.mark_host_pair(ev.data);
-    reply = harness.handle(line);
+    deadline = Number.isFinite(limit) && limit > 0 ? performance.now() + limit : Infinity;
+    try {
+      reply = harness.handle(line);
+    } finally {
+      deadline = Infinity;
+    }
+    if (overran) return;
   } catch (e) {
+    if (overran) return;
     // The harness catches whatever the student's code raises, so a throw here means Python
     // itself ended: os._exit() makes Pyodide throw "Program terminated with exit(N)" and
     // refuse every later call. That is the native marker's crash (the process ended), told
