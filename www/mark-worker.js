@@ -7,8 +7,8 @@
 // answers {type: "markReply", id, line}. A call that runs too long is stopped by the page,
 // which terminates this worker and starts another (Python cannot be interrupted from
 // outside without cross-origin isolation). The page also sends the request's limit: past it
-// (and a grace) the worker interrupts its own Python, since JavaScriptCore keeps a terminated
-// worker's WebAssembly running (an endless loop would hold a core until the page closes).
+// the worker interrupts its own Python too, since JavaScriptCore keeps a terminated worker's
+// WebAssembly running (an endless loop would hold a core until the page closes).
 //
 // The page starts this module from a `blob:` URL (`import "<this URL>"`), so the worker runs
 // under the page's Content-Security-Policy (connect-src 'self', no 'unsafe-eval'): whatever

@@ -189,8 +189,8 @@ impl MarkWorker {
         let _ = set("id", id.into());
         let _ = set("op", op.into());
         let _ = set("line", line.into());
-        // The worker stops its own Python a little after this (mark-worker.js): an engine
-        // may leave a terminated worker's loop running.
+        // The worker stops its own Python at this limit too (mark-worker.js): an engine may
+        // leave a terminated worker's loop running.
         let _ = set("limit", ms.into());
         self.worker.post_message(&msg).map_err(|e| Failure::Crashed(js_err(e)))?;
         reject_after(&rej, ms);
