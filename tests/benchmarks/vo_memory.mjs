@@ -25,7 +25,7 @@ import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath, pathToFileURL } from 'node:url';
-import { serve, launchChromium } from '../e2e/harness.mjs';
+import { serve, launchChromium, descendants } from '../e2e/harness.mjs';
 
 export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '../..');
 const require = createRequire(path.join(ROOT, 'tests/e2e/package.json'));
@@ -64,32 +64,14 @@ export function cliAte(cli, dir, last, lanes) {
   return { ate: m[2], wallS: wall };
 }
 
-function children() {
-  const kids = new Map();
-  for (const d of fs.readdirSync('/proc')) {
-    if (!/^\d+$/.test(d)) continue;
-    try {
-      const stat = fs.readFileSync(`/proc/${d}/stat`, 'utf8');
-      const ppid = Number(stat.slice(stat.lastIndexOf(')') + 2).split(' ')[1]);
-      if (!kids.has(ppid)) kids.set(ppid, []);
-      kids.get(ppid).push(Number(d));
-    } catch { /* gone */ }
-  }
-  return kids;
-}
-
 /**
  * One reading of the Chromium processes under `rootPid` (this Node process by default:
  * Playwright starts the browser as its child, the zygote and every renderer below it):
  * their VmRSS, the renderers' apart.
  */
 export function chromiumRss(rootPid = process.pid) {
-  const kids = children();
   const out = { total: 0, renderers: [], processes: 0 };
-  const stack = [...(kids.get(rootPid) || [])];
-  while (stack.length) {
-    const pid = stack.pop();
-    stack.push(...(kids.get(pid) || []));
+  for (const pid of descendants(rootPid).keys()) {
     let cmd;
     let rss;
     try {

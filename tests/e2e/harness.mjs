@@ -20,7 +20,7 @@ import { ROOT } from './harness/base.mjs';
 import { launch } from './harness/browsers.mjs';
 import { serve } from './harness/serve.mjs';
 
-export { ROOT, sleep, descendantsCpuSeconds } from './harness/base.mjs';
+export { ROOT, sleep, descendants, descendantsCpuSeconds } from './harness/base.mjs';
 export { CHROMIUM_ARGS, ENGINES, launch, launchChromium } from './harness/browsers.mjs';
 export { serve } from './harness/serve.mjs';
 

@@ -8,24 +8,28 @@ export const ROOT = path.resolve(path.dirname(fileURLToPath(import.meta.url)), '
 
 export const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
 
-// The CPU seconds (user + system) the processes below this one have used so far: the drivers
-// and the browsers they launched, whose processes are their children (Linux /proc).
-export function descendantsCpuSeconds(root = process.pid) {
-  const tick = 100; // USER_HZ on Linux
+// The processes below `root` (this Node process by default: the drivers, and the browsers they
+// launched as their children), from Linux's /proc: pid -> its /proc/PID/stat fields after the
+// command name (which sits in parentheses and may hold spaces).
+export function descendants(root = process.pid) {
   const procs = new Map();
   for (const d of fs.readdirSync('/proc')) {
     if (!/^\d+$/.test(d)) continue;
-    let stat;
-    try { stat = fs.readFileSync(`/proc/${d}/stat`, 'utf8'); } catch { continue; }
-    // The command name is in parentheses and may hold spaces: the fields follow the last ')'.
-    const f = stat.slice(stat.lastIndexOf(')') + 2).split(' ');
-    procs.set(Number(d), { ppid: Number(f[1]), cpu: (Number(f[11]) + Number(f[12])) / tick });
+    try {
+      const stat = fs.readFileSync(`/proc/${d}/stat`, 'utf8');
+      procs.set(Number(d), stat.slice(stat.lastIndexOf(')') + 2).split(' '));
+    } catch { /* gone */ }
   }
   const below = (pid) => {
-    for (let p = procs.get(pid)?.ppid; p; p = procs.get(p)?.ppid) if (p === root) return true;
+    for (let p = Number(procs.get(pid)?.[1]); p; p = Number(procs.get(p)?.[1])) if (p === root) return true;
     return false;
   };
+  return new Map([...procs].filter(([pid]) => below(pid)));
+}
+
+// The CPU seconds (user + system; USER_HZ 100 on Linux) the processes below this one have used.
+export function descendantsCpuSeconds(root = process.pid) {
   let s = 0;
-  for (const [pid, p] of procs) if (below(pid)) s += p.cpu;
+  for (const f of descendants(root).values()) s += (Number(f[11]) + Number(f[12])) / 100;
   return s;
 }
