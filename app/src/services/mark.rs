@@ -28,6 +28,15 @@ pub enum Failure {
 
 type Resolver = (js_sys::Function, js_sys::Function);
 
+thread_local! {
+    /// The memory snapshot of a Python that had just started (www/mark-worker.js), made by
+    /// this page's first mark worker before any student code ran in it: each later worker
+    /// starts from it instead of running CPython's start-up again.
+    /// With it, the reference time (ms) that start measured: a restored Python runs the
+    /// workload untimed until it is about that fast (its engine's tiers warm up).
+    static SNAPSHOT: RefCell<Option<(js_sys::Uint8Array, f64)>> = const { RefCell::new(None) };
+}
+
 #[derive(Default)]
 struct State {
     next: u32,
@@ -72,9 +81,9 @@ fn reject_after(rej: &js_sys::Function, ms: i32) {
 
 impl MarkWorker {
     /// Starts the worker and waits until Python is up (at most `ms`):
-    /// returns the start-up time the worker measured and its time for the
-    /// reference workload, in ms.
-    pub async fn start(ms: i32) -> Result<(MarkWorker, f64, f64), Failure> {
+    /// returns the start-up time the worker measured, its time for the
+    /// reference workload, in ms, and whether Python came from the snapshot.
+    pub async fn start(ms: i32) -> Result<(MarkWorker, f64, f64, bool), Failure> {
         let opts = web_sys::WorkerOptions::new();
         opts.set_type(web_sys::WorkerType::Module);
         opts.set_name(MARK_WORKER_NAME);
@@ -90,6 +99,15 @@ impl MarkWorker {
             match get("type").as_string().as_deref() {
                 Some("markReady") => {
                     if let Some((res, _)) = st.borrow_mut().ready.take() {
+                        // Only the start's own answer may carry a snapshot: it comes before the
+                        // student's file reaches this worker (a message posted later finds no
+                        // pending start and is ignored).
+                        if let Ok(snap) = get("snapshot").dyn_into::<js_sys::Uint8Array>() {
+                            let warm = get("reference").as_f64().filter(|r| r.is_finite() && *r > 0.0).unwrap_or(0.0);
+                            SNAPSHOT.with(|s| {
+                                s.borrow_mut().get_or_insert((snap, warm));
+                            });
+                        }
                         let _ = res.call1(&JsValue::NULL, &data);
                     }
                 }
@@ -146,12 +164,28 @@ impl MarkWorker {
         worker.set_onmessage(Some(on_message.as_ref().unchecked_ref()));
         worker.set_onerror(Some(on_error.as_ref().unchecked_ref()));
         let w = MarkWorker { worker, state, _handlers: [on_message, on_error] };
+        let start = js_sys::Object::new();
+        let _ = js_sys::Reflect::set(&start, &"op".into(), &"start".into());
+        if let Some((snap, warm)) = SNAPSHOT.with(|s| s.borrow().clone()) {
+            // Copied to the worker (structured clone): the page keeps its own for the next.
+            let _ = js_sys::Reflect::set(&start, &"snapshot".into(), &snap);
+            let _ = js_sys::Reflect::set(&start, &"warm".into(), &warm.into());
+        }
+        if let Err(e) = w.worker.post_message(&start) {
+            return Err(Failure::Crashed(format!("cannot start the marking worker: {}", js_err(e))));
+        }
         reject_after(&resolver.1, ms);
         match wasm_bindgen_futures::JsFuture::from(ready).await {
             Ok(v) => {
                 let get = |k: &str| js_sys::Reflect::get(&v, &k.into()).ok().and_then(|v| v.as_f64());
                 // No figure is the slowest: the limits get the cap.
-                Ok((w, get("ms").unwrap_or(0.0), get("reference").unwrap_or(f64::INFINITY)))
+                let restored = js_sys::Reflect::get(&v, &"from".into()).ok().and_then(|f| f.as_string());
+                Ok((
+                    w,
+                    get("ms").unwrap_or(0.0),
+                    get("reference").unwrap_or(f64::INFINITY),
+                    restored.as_deref() == Some("snapshot"),
+                ))
             }
             Err(e) => {
                 w.worker.terminate();
@@ -251,6 +285,8 @@ pub struct Timing {
     pub speeds: Vec<f64>,
     /// A call's limit after the first start, in seconds.
     pub call_limit_s: f64,
+    /// How many of the starts came from the page's Python snapshot.
+    pub restored: usize,
 }
 
 /// The frames' features, computed before the marking starts.
@@ -278,7 +314,8 @@ pub async fn run(
     use crate::model::mark::{REFERENCE_NOMINAL_MS, SPEED_CAP, START_LIMIT_MS};
     use crate::platform::now_ms;
     use std::collections::{BTreeMap, BTreeSet};
-    let mut timing = Timing { sift_ms: 0.0, start_ms: 0.0, calls_ms: 0.0, speeds: Vec::new(), call_limit_s: 0.0 };
+    let mut timing =
+        Timing { sift_ms: 0.0, start_ms: 0.0, calls_ms: 0.0, speeds: Vec::new(), call_limit_s: 0.0, restored: 0 };
     let text = match check_source(&bytes) {
         Ok(t) => t.to_string(),
         Err(r) => return Ok((Marks::rejected(seed, n, r), timing)),
@@ -323,13 +360,14 @@ pub async fn run(
                 }
                 // A restart on a slow or busy machine gets the scaled time.
                 let start_limit = (f64::from(START_LIMIT_MS) * session.scale()) as i32;
-                let (w, ms, reference) = MarkWorker::start(start_limit).await.map_err(|e| match e {
+                let (w, ms, reference, restored) = MarkWorker::start(start_limit).await.map_err(|e| match e {
                     Failure::Crashed(m) => m,
                     Failure::Timeout => "Python did not start in time".to_string(),
                 })?;
                 if timing.start_ms == 0.0 {
                     timing.start_ms = ms;
                 }
+                timing.restored += usize::from(restored);
                 // Measured at every start: a machine that got busy since
                 // gets longer limits for the re-run.
                 session.measured(reference / REFERENCE_NOMINAL_MS);
