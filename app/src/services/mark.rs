@@ -102,11 +102,11 @@ impl MarkWorker {
                         // Only the start's own answer may carry a snapshot: it comes before the
                         // student's file reaches this worker (a message posted later finds no
                         // pending start and is ignored).
+                        // A worker sends one only from a fresh start: the page had none, or the
+                        // one it had did not load (it is replaced).
                         if let Ok(snap) = get("snapshot").dyn_into::<js_sys::Uint8Array>() {
                             let warm = get("reference").as_f64().filter(|r| r.is_finite() && *r > 0.0).unwrap_or(0.0);
-                            SNAPSHOT.with(|s| {
-                                s.borrow_mut().get_or_insert((snap, warm));
-                            });
+                            SNAPSHOT.with(|s| *s.borrow_mut() = Some((snap, warm)));
                         }
                         let _ = res.call1(&JsValue::NULL, &data);
                     }
