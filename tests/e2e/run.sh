@@ -35,7 +35,7 @@ fi
 if [ ! -f dist/index.html ] || [ ! -f dist/pkg/siftlab_app_bg.wasm ]; then
     www/build
 fi
-# The reference CLI: SIFTLAB_CLI if set (tests/run passes the one its tests built), else the
+# The reference CLI: SIFTLAB_CLI if set (tests/run passes its `reference` build), else the
 # release build of the target dir cargo builds into (CARGO_TARGET_DIR honoured), built if
 # missing; the tests read its path from SIFTLAB_CLI.
 if [ -z "${SIFTLAB_CLI:-}" ]; then
