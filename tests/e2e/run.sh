@@ -53,6 +53,9 @@ ENGINES="${E2E_ENGINES:-chromium firefox webkit}"
 LANES="${E2E_LANES:-2}"
 WORK="$(mktemp -d "${TMPDIR:-/tmp}/siftlab-e2e.XXXXXX")"
 trap 'rm -rf "$WORK"' EXIT
+# The browsers' profiles (ChromeDriver leaves each session's, 53 MB), the uploads' and the
+# servers' scratch: under $WORK, removed with it.
+export TMPDIR="$WORK"
 SUMMARY="$WORK/summary.tsv"
 : > "$SUMMARY"
 # The CLI's answers, shared by the suites of this run (app/common.mjs, cliCached).
