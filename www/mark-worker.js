@@ -3,9 +3,9 @@
 // `vision_tasks_base` (dist/py/). Its BFMatcher().knnMatch is answered by siftlab's own
 // matcher (the worker's WebAssembly build, mark_host_knn), never computed in Python.
 //
-// The page first sends {op: "start", snapshot, warm}: the memory snapshot of a Python that
-// has just started (below) and the reference time that start measured, or none; the worker
-// answers {type: "markReady"} once Python is up.
+// The page first sends {op: "start", snapshot, warm, module}: the memory snapshot of a Python
+// that has just started (below), the reference time that start measured and Pyodide's
+// compiled WebAssembly, or none; the worker answers {type: "markReady"} once Python is up.
 // Then the page sends {id, op, line}: one request of docs/marking.md's protocol; the worker
 // answers {type: "markReply", id, line}. A call that runs too long is stopped by the page,
 // which terminates this worker and starts another (Python cannot be interrupted from
@@ -107,28 +107,62 @@ const STOP = {
 // or any student code exist in it, and hands the bytes to the page; the page gives them to
 // the workers it starts after (a restart after a time-out, the next file marked). Pyodide
 // checks the snapshot's build; one it refuses, a fresh start replaces.
-async function python(snapshot) {
+async function python(snapshot, module) {
   const indexURL = new URL('./pyodide/', import.meta.url).href;
   // The student's prints are captured by the harness; anything else is a log line.
   const io = { stdout: (s) => console.log('[python]', s), stderr: (s) => console.warn('[python]', s) };
   if (snapshot) {
     try {
-      return { py: await loadPyodide({ indexURL, ...io, _loadSnapshot: snapshot }), from: 'snapshot' };
+      const { value: py, compiled } = await withCompiled(module, () => loadPyodide({ indexURL, ...io, _loadSnapshot: snapshot }));
+      return { py, from: 'snapshot', compiled };
     } catch (e) {
       console.warn('[mark] the Python snapshot did not load, starting afresh:', String(e && e.message ? e.message : e));
     }
   }
-  const py = await loadPyodide({ indexURL, ...io, _makeSnapshot: true });
-  return { py, from: 'fresh', made: py.makeMemorySnapshot() };
+  const { value: py, compiled } = await withCompiled(module, () => loadPyodide({ indexURL, ...io, _makeSnapshot: true }));
+  return { py, from: 'fresh', made: py.makeMemorySnapshot(), compiled };
 }
 
-async function start(snapshot, warm) {
+// Pyodide's compiled WebAssembly, shared: each worker would compile its 9.6 MB again, and an
+// engine that compiles in tiers (JavaScriptCore, measured in WebKit: ~6 CPU-s a start, its
+// restored Pythons 2-9x slow for their first runs) runs a new compile's slow tiers first. A
+// WebAssembly.Module posted to another worker shares its code, optimised tiers included. The
+// first worker hands its module to the page with the snapshot; each later one instantiates it
+// instead of compiling. Pyodide compiles with instantiateStreaming, which is routed here
+// while `load` runs (before our files or any student code exist in this worker), then put back.
+async function withCompiled(module, load) {
+  const streaming = WebAssembly.instantiateStreaming;
+  let compiled = null;
+  WebAssembly.instantiateStreaming = async (source, imports) => {
+    if (module instanceof WebAssembly.Module) {
+      try {
+        const instance = await WebAssembly.instantiate(module, imports);
+        // The response is not read: the compiled module stands for it.
+        Promise.resolve(source).then((r) => r.body && r.body.cancel()).catch(() => {});
+        compiled = module;
+        return { instance, module };
+      } catch (e) {
+        console.warn('[mark] the shared Pyodide module did not instantiate, compiling:', String(e && e.message ? e.message : e));
+      }
+    }
+    const made = await streaming.call(WebAssembly, source, imports);
+    compiled = made.module;
+    return made;
+  };
+  try {
+    return { value: await load(), compiled };
+  } finally {
+    WebAssembly.instantiateStreaming = streaming;
+  }
+}
+
+async function start(snapshot, warm, module) {
   const t0 = performance.now();
   // The SIMD128 build: it runs in every engine, and k-NN needs no relaxed SIMD. Its start
   // function leaves this worker alone (the worker is named "siftlab-mark").
   const wasm = await import('./pkg/siftlab_worker.js');
   await wasm.default();
-  const { py, from, made } = await python(snapshot);
+  const { py, from, made, compiled } = await python(snapshot, module);
   // Before the reference workload: what it times includes the reads (one per 50 checks).
   py.setInterruptBuffer(STOP);
   for (const f of FILES) {
@@ -144,7 +178,7 @@ async function start(snapshot, warm) {
   // Python starts only now; what it must not reach goes first (mark-lockdown.js): the
   // network, this origin's storage, nested workers, and JavaScript from Python's imports.
   lockDown(py);
-  return { wasm, harness, ms: performance.now() - t0, reference, from, made };
+  return { wasm, harness, ms: performance.now() - t0, reference, from, made, compiled, shared: compiled !== null && compiled === module };
 }
 
 // Started by the page's first message, which carries the snapshot (or none).
@@ -154,10 +188,15 @@ onmessage = async (ev) => {
   const { id, op, line, limit } = ev.data;
   if (op === 'start') {
     if (ready) return;
-    ready = start(ev.data.snapshot, Number(ev.data.warm) || 0);
+    ready = start(ev.data.snapshot, Number(ev.data.warm) || 0, ev.data.module);
     ready.then(
-      // The snapshot goes to the page before the student's file is sent to this worker.
-      ({ ms, reference, from, made }) => postMessage({ type: 'markReady', ms, reference, from, snapshot: made }, made ? [made.buffer] : []),
+      // The snapshot and the compiled module go to the page before the student's file is
+      // sent to this worker (a module is shared, not copied).
+      ({ ms, reference, from, made, compiled, shared }) => postMessage(
+        {
+          type: 'markReady', ms, reference, from, snapshot: made, module: made ? compiled : undefined,
+          compiled: shared ? 'shared' : 'compiled',
+        }, made ? [made.buffer] : []),
       (e) => postMessage({ type: 'markFailed', message: `Python could not start: ${e && e.message ? e.message : e}` }),
     );
     return;

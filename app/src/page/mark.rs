@@ -114,6 +114,7 @@ fn Report(o: Outcome) -> impl IntoView {
                 data-slowest-speed=format!("{slowest:.3}")
                 data-speeds=speeds
                 data-restored=o.timing.restored
+                data-shared=o.timing.shared
                 data-call-limit=format!("{:.3}", o.timing.call_limit_s)>
                 {format!(
                     "seed {}, {} calls per task · marked in {:.1} s (SIFT {:.1} s, Python's start {:.1} s, the calls {:.1} s){speed_text}",

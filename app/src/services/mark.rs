@@ -33,8 +33,10 @@ thread_local! {
     /// this page's first mark worker before any student code ran in it: each later worker
     /// starts from it instead of running CPython's start-up again.
     /// With it, the reference time (ms) that start measured: a restored Python runs the
-    /// workload untimed until it is about that fast (its engine's tiers warm up).
-    static SNAPSHOT: RefCell<Option<(js_sys::Uint8Array, f64)>> = const { RefCell::new(None) };
+    /// workload untimed until it is about that fast (its engine's tiers warm up); and that
+    /// worker's compiled Pyodide (a `WebAssembly.Module`), which later workers instantiate
+    /// instead of compiling it again (shared code: an engine's optimised tiers too).
+    static SNAPSHOT: RefCell<Option<(js_sys::Uint8Array, f64, JsValue)>> = const { RefCell::new(None) };
 }
 
 #[derive(Default)]
@@ -46,6 +48,17 @@ struct State {
     ready: Option<Resolver>,
     /// Messages that were no reply (forged by the student's code, or late).
     stray: usize,
+}
+
+/// A mark worker whose Python is up: its start's time, its reference workload's time (ms),
+/// whether Python came from the page's snapshot and whether the worker instantiated the
+/// page's compiled Pyodide.
+pub struct Started {
+    pub worker: MarkWorker,
+    pub ms: f64,
+    pub reference: f64,
+    pub restored: bool,
+    pub shared: bool,
 }
 
 /// One running mark worker.
@@ -80,10 +93,8 @@ fn reject_after(rej: &js_sys::Function, ms: i32) {
 }
 
 impl MarkWorker {
-    /// Starts the worker and waits until Python is up (at most `ms`):
-    /// returns the start-up time the worker measured, its time for the
-    /// reference workload, in ms, and whether Python came from the snapshot.
-    pub async fn start(ms: i32) -> Result<(MarkWorker, f64, f64, bool), Failure> {
+    /// Starts the worker and waits until Python is up (at most `ms`).
+    pub async fn start(ms: i32) -> Result<Started, Failure> {
         let opts = web_sys::WorkerOptions::new();
         opts.set_type(web_sys::WorkerType::Module);
         opts.set_name(MARK_WORKER_NAME);
@@ -106,7 +117,13 @@ impl MarkWorker {
                         // one it had did not load (it is replaced).
                         if let Ok(snap) = get("snapshot").dyn_into::<js_sys::Uint8Array>() {
                             let warm = get("reference").as_f64().filter(|r| r.is_finite() && *r > 0.0).unwrap_or(0.0);
-                            SNAPSHOT.with(|s| *s.borrow_mut() = Some((snap, warm)));
+                            let module = get("module");
+                            let module = if module.is_instance_of::<js_sys::WebAssembly::Module>() {
+                                module
+                            } else {
+                                JsValue::UNDEFINED
+                            };
+                            SNAPSHOT.with(|s| *s.borrow_mut() = Some((snap, warm, module)));
                         }
                         let _ = res.call1(&JsValue::NULL, &data);
                     }
@@ -166,10 +183,11 @@ impl MarkWorker {
         let w = MarkWorker { worker, state, _handlers: [on_message, on_error] };
         let start = js_sys::Object::new();
         let _ = js_sys::Reflect::set(&start, &"op".into(), &"start".into());
-        if let Some((snap, warm)) = SNAPSHOT.with(|s| s.borrow().clone()) {
+        if let Some((snap, warm, module)) = SNAPSHOT.with(|s| s.borrow().clone()) {
             // Copied to the worker (structured clone): the page keeps its own for the next.
             let _ = js_sys::Reflect::set(&start, &"snapshot".into(), &snap);
             let _ = js_sys::Reflect::set(&start, &"warm".into(), &warm.into());
+            let _ = js_sys::Reflect::set(&start, &"module".into(), &module);
         }
         if let Err(e) = w.worker.post_message(&start) {
             return Err(Failure::Crashed(format!("cannot start the marking worker: {}", js_err(e))));
@@ -180,12 +198,14 @@ impl MarkWorker {
                 let get = |k: &str| js_sys::Reflect::get(&v, &k.into()).ok().and_then(|v| v.as_f64());
                 // No figure is the slowest: the limits get the cap.
                 let restored = js_sys::Reflect::get(&v, &"from".into()).ok().and_then(|f| f.as_string());
-                Ok((
-                    w,
-                    get("ms").unwrap_or(0.0),
-                    get("reference").unwrap_or(f64::INFINITY),
-                    restored.as_deref() == Some("snapshot"),
-                ))
+                let compiled = js_sys::Reflect::get(&v, &"compiled".into()).ok().and_then(|f| f.as_string());
+                Ok(Started {
+                    worker: w,
+                    ms: get("ms").unwrap_or(0.0),
+                    reference: get("reference").unwrap_or(f64::INFINITY),
+                    restored: restored.as_deref() == Some("snapshot"),
+                    shared: compiled.as_deref() == Some("shared"),
+                })
             }
             Err(e) => {
                 w.worker.terminate();
@@ -287,6 +307,9 @@ pub struct Timing {
     pub call_limit_s: f64,
     /// How many of the starts came from the page's Python snapshot.
     pub restored: usize,
+    /// How many of the starts instantiated the page's compiled Pyodide instead of
+    /// compiling it (www/mark-worker.js).
+    pub shared: usize,
 }
 
 /// The frames' features, computed before the marking starts.
@@ -314,8 +337,15 @@ pub async fn run(
     use crate::model::mark::{REFERENCE_NOMINAL_MS, SPEED_CAP, START_LIMIT_MS};
     use crate::platform::now_ms;
     use std::collections::{BTreeMap, BTreeSet};
-    let mut timing =
-        Timing { sift_ms: 0.0, start_ms: 0.0, calls_ms: 0.0, speeds: Vec::new(), call_limit_s: 0.0, restored: 0 };
+    let mut timing = Timing {
+        sift_ms: 0.0,
+        start_ms: 0.0,
+        calls_ms: 0.0,
+        speeds: Vec::new(),
+        call_limit_s: 0.0,
+        restored: 0,
+        shared: 0,
+    };
     let text = match check_source(&bytes) {
         Ok(t) => t.to_string(),
         Err(r) => return Ok((Marks::rejected(seed, n, r), timing)),
@@ -360,14 +390,16 @@ pub async fn run(
                 }
                 // A restart on a slow or busy machine gets the scaled time.
                 let start_limit = (f64::from(START_LIMIT_MS) * session.scale()) as i32;
-                let (w, ms, reference, restored) = MarkWorker::start(start_limit).await.map_err(|e| match e {
-                    Failure::Crashed(m) => m,
-                    Failure::Timeout => "Python did not start in time".to_string(),
-                })?;
+                let Started { worker: w, ms, reference, restored, shared } =
+                    MarkWorker::start(start_limit).await.map_err(|e| match e {
+                        Failure::Crashed(m) => m,
+                        Failure::Timeout => "Python did not start in time".to_string(),
+                    })?;
                 if timing.start_ms == 0.0 {
                     timing.start_ms = ms;
                 }
                 timing.restored += usize::from(restored);
+                timing.shared += usize::from(shared);
                 // Measured at every start: a machine that got busy since
                 // gets longer limits for the re-run.
                 session.measured(reference / REFERENCE_NOMINAL_MS);

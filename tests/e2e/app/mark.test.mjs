@@ -63,7 +63,7 @@ async function pageSpeed() {
   const get = (a) => page.getAttribute(tid('mark-timing'), a).then(Number);
   const speed = { speed: await get('data-speed'), slowest: await get('data-slowest-speed'), limit: await get('data-call-limit'),
     speeds: (await page.getAttribute(tid('mark-timing'), 'data-speeds')).split(',').filter(Boolean).map(Number),
-    restored: await get('data-restored') };
+    restored: await get('data-restored'), shared: await get('data-shared') };
   metrics.markSpeeds = [...(metrics.markSpeeds || []), speed];
   return speed;
 }
@@ -94,8 +94,10 @@ test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI 
   const got = await pageMarks();
   assert.equal(got.total, '20.00', JSON.stringify(got));
   assert.deepEqual(got, cliMarks(cliMark('good', MARK_N, 1)));
-  // The page's first Python starts afresh (and gives the page its snapshot).
+  // The page's first Python starts afresh (and gives the page its snapshot and its compiled
+  // Pyodide).
   assert.equal(metrics.markSpeeds.at(-1).restored, 0);
+  assert.equal(metrics.markSpeeds.at(-1).shared, 0);
   await page.elementScreenshot(tid('mark'), shot('mark-good.png'));
   // The introduction is body text, not bold (it once inherited the ✓ marks' weight).
   const weight = await page.evaluate((sel) => getComputedStyle(document.querySelector(sel)).fontWeight, tid('mark-intro'));
@@ -105,6 +107,7 @@ test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI 
   assert.deepEqual(bad, cliMarks(cliMark('inverted', MARK_N, 1)));
   // The next file's Python comes from that snapshot (www/mark-worker.js).
   assert.equal(metrics.markSpeeds.at(-1).restored, 1, 'the second marking starts Python from the snapshot');
+  assert.equal(metrics.markSpeeds.at(-1).shared, 1, 'and instantiates the compiled Pyodide the first made');
   assert.ok(bad.diagnoses.some((d) => d.startsWith('nndr:')), JSON.stringify(bad));
   await page.elementScreenshot(tid('mark'), shot('mark-nndr-inverted.png'));
   // "see this case" on the wrong nndr call: the explorer's link on its pair, ratio and first
@@ -145,8 +148,9 @@ test('mark my code: hostile files: no connection, no forged mark, the CLI\'s tab
       // Each file after the page's first gets a Python from the first's snapshot, taken
       // before any student code ran: what a file did in its Python is not in the next's.
       // (ansi_escapes' crash restarts Python: that start comes from the snapshot too.)
-      const { restored, speeds } = metrics.markSpeeds.at(-1);
+      const { restored, shared, speeds } = metrics.markSpeeds.at(-1);
       assert.equal(restored, speeds.length - (variant === 'hostile/browser_escape' ? 1 : 0), variant);
+      assert.equal(shared, restored, `${variant}: each restored Python instantiates the first's compiled Pyodide`);
       metrics[`markHostile_${variant.split('/')[1]}`] = got.total;
       // Whatever the file printed or raised, the page shows no control character.
       const text = await page.textContent(tid('mark'));
@@ -200,6 +204,7 @@ test('mark my code: an endless loop is stopped at its limit and the page stays u
   assert.ok(speed.speeds.length >= 3, JSON.stringify(speed));
   // The restarts start Python from the snapshot of the first start.
   assert.equal(speed.restored, speed.speeds.length - 1, JSON.stringify(speed));
+  assert.equal(speed.shared, speed.restored, JSON.stringify(speed));
   const tooSlow = Math.max(speed.speeds[0], speed.speeds[1]) > 8;
   const want = cli.diagnoses.map((d) => (tooSlow ? d.replace(/:timeout$/, ':too_slow_here') : d));
   assert.deepEqual(got.diagnoses, want, JSON.stringify({ got, speed }));
