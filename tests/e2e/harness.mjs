@@ -26,11 +26,12 @@ export { serve } from './harness/serve.mjs';
 
 /**
  * Registers a test file's hooks: dist/ served and one `engine` session for the file
- * (`onStart({ base, browser })`), a fresh 1400×900 page for each case (`onPage(page)`),
+ * (`onStart({ base, browser })`), a fresh 1400×900 page for each case (`onPage(page)`; with
+ * `onePage`, the file's first case's page for every case, left as the last case left it),
  * and after each case the checks every case shares: no resource fetched off our origin,
  * no error recorded by the page or its workers. `onEnd` runs once, after the last case.
  */
-export function suite(engine, { onStart = () => {}, onPage, onEnd = () => {} }) {
+export function suite(engine, { onStart = () => {}, onPage, onEnd = () => {}, onePage = false }) {
   let server;
   let browser;
   let page;
@@ -45,7 +46,7 @@ export function suite(engine, { onStart = () => {}, onPage, onEnd = () => {} }) 
     await onEnd();
   });
   beforeEach(async () => {
-    page = await browser.newPage({ width: 1400, height: 900 });
+    if (!(onePage && page)) page = await browser.newPage({ width: 1400, height: 900 });
     onPage(page);
   });
   afterEach(async () => {

@@ -92,8 +92,9 @@ function saveMetrics() {
 }
 
 /** The browser, the server of dist/ and a fresh page per case, for one file's cases. */
-export function appSuite() {
+export function appSuite({ onePage = false } = {}) {
   suite(ENGINE, {
+    onePage,
     onStart: ({ base, browser }) => {
       assert.ok(fs.existsSync(CLI), `${CLI} missing: cargo build --release --bin siftlab`);
       BASE = base;
