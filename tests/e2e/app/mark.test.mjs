@@ -95,45 +95,17 @@ function cliMarks(j) {
   };
 }
 
-test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI marks them (${MARK_N} calls per task)`, async () => {
-  assert.ok(firstInPage(), 'the file\'s first case');
-  const s = await markFile('good', MARK_N, 1);
-  metrics.markGoodS = s;
-  metrics.markTiming = await page.textContent(tid('mark-timing'));
-  const got = await pageMarks();
-  assert.equal(got.total, '20.00', JSON.stringify(got));
-  assert.deepEqual(got, cliMarks(cliMark('good', MARK_N, 1)));
-  // The page's first Python starts afresh (and gives the page its snapshot and its compiled
-  // Pyodide).
-  assert.equal(metrics.markSpeeds.at(-1).restored, 0);
-  assert.equal(metrics.markSpeeds.at(-1).shared, 0);
-  await page.elementScreenshot(tid('mark'), shot('mark-good.png'));
-  // The introduction is body text, not bold (it once inherited the ✓ marks' weight).
-  const weight = await page.evaluate((sel) => getComputedStyle(document.querySelector(sel)).fontWeight, tid('mark-intro'));
-  assert.ok(Number(weight) < 600, `the introduction's font-weight is ${weight}`);
-  await markFile('inverted', MARK_N, 1);
-  const bad = await pageMarks();
-  assert.deepEqual(bad, cliMarks(cliMark('inverted', MARK_N, 1)));
-  // The next file's Python comes from that snapshot (www/mark-worker.js).
-  assert.equal(metrics.markSpeeds.at(-1).restored, 1, 'the second marking starts Python from the snapshot');
-  assert.equal(metrics.markSpeeds.at(-1).shared, 1, 'and instantiates the compiled Pyodide the first made');
-  assert.ok(bad.diagnoses.some((d) => d.startsWith('nndr:')), JSON.stringify(bad));
-  await page.elementScreenshot(tid('mark'), shot('mark-nndr-inverted.png'));
-  // "see this case" on the wrong nndr call: the explorer's link on its pair, ratio and first
-  // differing feature (the class view's test follows such a link to get_info's tuple).
-  const cases = cliMark('inverted', MARK_N, 1).cases.filter((c) => c.task === 'nndr' && c.status === 'wrong');
-  const links = await page.evalAll(`${tid('mark-failure')}[data-task="nndr"] ${tid('see-case')}`, (a) => a.getAttribute('href'));
-  assert.ok(cases.length > 0);
-  assert.deepEqual(links, cases.map((c) => `?src=demo&frame=${c.frame}&feature=${c.differs_at}&algo=nndr&t=${c.threshold}`));
-});
-
 // Hostile files in the browser (tests/fixtures/mark/hostile), one call per task (each attack
 // happens on a task's first call, as in tests/security/hostile_check.py): the worker runs under the page's
 // CSP, so nothing reaches another origin (a listener on a free port of 127.0.0.1 counts
 // connections: browser_escape is marked from a copy aiming at that port instead of its
 // 47011); forged replies posted to the page and objects that always say "equal" change no
-// mark; a crash (os._exit) and stray output end no marking. The table is the CLI's.
+// mark; a crash (os._exit) and stray output end no marking. The table is the CLI's. The
+// file's first case: browser_escape is the page's first marking, so the markReady it forges
+// (with a compiled module of its own) comes from the worker whose snapshot and module the
+// page keeps for every later start, the good solution's below included.
 test('mark my code: hostile files: no connection, no forged mark, the CLI\'s table', async () => {
+  assert.ok(firstInPage(), 'the hostile files are the page\'s first markings');
   const net = await import('node:net');
   let connections = 0;
   const server = net.createServer((s) => { connections += 1; s.destroy(); });
@@ -172,6 +144,38 @@ test('mark my code: hostile files: no connection, no forged mark, the CLI\'s tab
   }
   metrics.markHostileConnections = connections;
   assert.equal(connections, 0, 'a connection reached the listener');
+});
+
+test(`mark my code: the good solution 20/20 and a broken nndr marked as the CLI marks them (${MARK_N} calls per task)`, async () => {
+  const fresh = firstInPage();
+  const s = await markFile('good', MARK_N, 1);
+  metrics.markGoodS = s;
+  metrics.markTiming = await page.textContent(tid('mark-timing'));
+  const got = await pageMarks();
+  assert.equal(got.total, '20.00', JSON.stringify(got));
+  assert.deepEqual(got, cliMarks(cliMark('good', MARK_N, 1)));
+  // After the hostile files of the case before, in the same page: Python from the page's
+  // snapshot, in its compiled Pyodide (afresh if this case runs alone).
+  assert.equal(metrics.markSpeeds.at(-1).restored, fresh ? 0 : 1);
+  assert.equal(metrics.markSpeeds.at(-1).shared, fresh ? 0 : 1);
+  await page.elementScreenshot(tid('mark'), shot('mark-good.png'));
+  // The introduction is body text, not bold (it once inherited the ✓ marks' weight).
+  const weight = await page.evaluate((sel) => getComputedStyle(document.querySelector(sel)).fontWeight, tid('mark-intro'));
+  assert.ok(Number(weight) < 600, `the introduction's font-weight is ${weight}`);
+  await markFile('inverted', MARK_N, 1);
+  const bad = await pageMarks();
+  assert.deepEqual(bad, cliMarks(cliMark('inverted', MARK_N, 1)));
+  // The next file's Python comes from the page's snapshot (www/mark-worker.js).
+  assert.equal(metrics.markSpeeds.at(-1).restored, 1, 'a later marking starts Python from the snapshot');
+  assert.equal(metrics.markSpeeds.at(-1).shared, 1, 'and instantiates the compiled Pyodide the first made');
+  assert.ok(bad.diagnoses.some((d) => d.startsWith('nndr:')), JSON.stringify(bad));
+  await page.elementScreenshot(tid('mark'), shot('mark-nndr-inverted.png'));
+  // "see this case" on the wrong nndr call: the explorer's link on its pair, ratio and first
+  // differing feature (the class view's test follows such a link to get_info's tuple).
+  const cases = cliMark('inverted', MARK_N, 1).cases.filter((c) => c.task === 'nndr' && c.status === 'wrong');
+  const links = await page.evalAll(`${tid('mark-failure')}[data-task="nndr"] ${tid('see-case')}`, (a) => a.getAttribute('href'));
+  assert.ok(cases.length > 0);
+  assert.deepEqual(links, cases.map((c) => `?src=demo&frame=${c.frame}&feature=${c.differs_at}&algo=nndr&t=${c.threshold}`));
 });
 
 test('mark my code: an endless loop is stopped at its limit and the page stays usable; bad files get messages', async () => {
