@@ -9,6 +9,8 @@ import { sleep } from './base.mjs';
 const KEYS = { Enter: Key.ENTER, ArrowLeft: Key.ARROW_LEFT, ArrowRight: Key.ARROW_RIGHT, ArrowUp: Key.ARROW_UP, ArrowDown: Key.ARROW_DOWN, Home: Key.HOME, End: Key.END, Tab: Key.TAB, Escape: Key.ESCAPE };
 const q = (sel) => `document.querySelector(${JSON.stringify(sel)})`;
 
+const sameSize = (a, b) => a[0] === b[0] && a[1] === b[1];
+
 export class Page {
   constructor(browser) {
     this.browser = browser;
@@ -164,16 +166,29 @@ export class Page {
   /** Sets the viewport (not the window) to width × height CSS pixels. */
   async setViewportSize({ width, height }) {
     const win = this.d.manage().window();
-    let target = { width, height };
+    const read = () => this.d.executeScript('return [innerWidth, innerHeight]');
+    // The window's frame (its rect less the viewport) as last measured: with it, one resize
+    // reaches the viewport asked for, instead of one to learn the frame and one to correct.
+    const frame = this.windowFrame ?? { width: 0, height: 0 };
+    let target = { width: width + frame.width, height: height + frame.height };
     for (let i = 0; i < 3; i++) {
+      const before = await read();
+      if (before[0] === width && before[1] === height) return;
       await win.setRect(target);
-      // The page sees a resize a little after the driver answers (WebKitGTK under Xvfb
-      // especially): read the viewport once it has stopped changing.
-      let inner = await this.d.executeScript('return [innerWidth, innerHeight]');
+      // The page sees a resize a while after the driver answers (WebKitGTK under Xvfb; any
+      // engine on a busy machine: Chromium once read 1400 px 0.5 s after asking for 390).
+      // So wait until the page's viewport leaves its old size (or reaches the new one) and
+      // then stops changing. The wait for the first change is capped (3 s) for a window that
+      // cannot move at all, already at an engine's minimum: the only case that pays it.
+      let inner = await read();
+      for (let t0 = Date.now(); sameSize(inner, before) && Date.now() - t0 < 3000;) {
+        await sleep(25);
+        inner = await read();
+      }
       for (let k = 0; k < 20; k++) {
         await sleep(25);
-        const again = await this.d.executeScript('return [innerWidth, innerHeight]');
-        if (again[0] === inner[0] && again[1] === inner[1]) break;
+        const again = await read();
+        if (sameSize(again, inner)) break;
         inner = again;
       }
       if (inner[0] === width && inner[1] === height) return;
@@ -184,6 +199,7 @@ export class Page {
       const next = { width: rect.width + width - inner[0], height: rect.height + height - inner[1] };
       const sane = next.width >= width && next.height >= height && next.width < width + 400 && next.height < height + 400;
       if (!sane || (next.width === target.width && next.height === target.height)) return;
+      this.windowFrame = { width: next.width - width, height: next.height - height };
       target = next;
     }
   }
