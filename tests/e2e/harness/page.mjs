@@ -171,9 +171,10 @@ export class Page {
     // reaches the viewport asked for, instead of one to learn the frame and one to correct.
     const frame = this.windowFrame ?? { width: 0, height: 0 };
     let target = { width: width + frame.width, height: height + frame.height };
+    const wanted = [width, height];
     for (let i = 0; i < 3; i++) {
       const before = await read();
-      if (before[0] === width && before[1] === height) return;
+      if (sameSize(before, wanted)) return;
       await win.setRect(target);
       // The page sees a resize a while after the driver answers (WebKitGTK under Xvfb; any
       // engine on a busy machine: Chromium once read 1400 px 0.5 s after asking for 390).
@@ -191,7 +192,7 @@ export class Page {
         if (sameSize(again, inner)) break;
         inner = again;
       }
-      if (inner[0] === width && inner[1] === height) return;
+      if (sameSize(inner, wanted)) return;
       // The window's frame is the difference between its rect and the viewport. A window
       // that cannot get there (below an engine's minimum width, above the screen) stays
       // where it got: callers read innerWidth.
