@@ -17,6 +17,7 @@
 #![cfg(not(target_arch = "wasm32"))]
 
 mod hostile;
+mod idle;
 mod knn;
 mod refusals;
 mod solutions;
@@ -28,7 +29,6 @@ use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::sync::OnceLock;
-use std::time::{Duration, Instant};
 
 fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -64,24 +64,26 @@ fn fixture(name: &str) -> PathBuf {
     repo_root().join("tests/fixtures/mark").join(name).join("vision_tasks.py")
 }
 
-/// `siftlab --opencv-lanes 8 -d SMALL mark FILE ARGS…`, and how long it took.
-fn mark_with(file: &Path, args: &[&str], env: &[(&str, &str)]) -> (Output, Duration) {
-    let t0 = Instant::now();
-    let o = Command::new(env!("CARGO_BIN_EXE_siftlab"))
-        .current_dir(repo_root())
+/// The command `siftlab --opencv-lanes 8 -d SMALL mark FILE ARGS…`.
+fn mark_command(file: &Path, args: &[&str], env: &[(&str, &str)]) -> Command {
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_siftlab"));
+    cmd.current_dir(repo_root())
         .args(["--opencv-lanes", "8", "-d"])
         .arg(small_dataset())
         .arg("mark")
         .arg(file)
         .args(args)
-        .envs(env.iter().copied())
-        .output()
-        .expect("cannot start the siftlab binary");
-    (o, t0.elapsed())
+        .envs(env.iter().copied());
+    cmd
+}
+
+/// `siftlab --opencv-lanes 8 -d SMALL mark FILE ARGS…` with `env` added.
+fn mark_with(file: &Path, args: &[&str], env: &[(&str, &str)]) -> Output {
+    mark_command(file, args, env).output().expect("cannot start the siftlab binary")
 }
 
 fn mark(file: &Path, args: &[&str]) -> Output {
-    mark_with(file, args, &[]).0
+    mark_with(file, args, &[])
 }
 
 fn stdout(o: &Output) -> String {

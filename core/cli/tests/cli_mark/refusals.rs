@@ -47,7 +47,7 @@ fn what_cannot_be_marked_exits_2() {
     let o = mark(Path::new("no/such/vision_tasks.py"), &[]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("cannot read no/such/vision_tasks.py"), "{}", stderr(&o));
-    let (o, _) = mark_with(&fixture("good"), &["-n", "1"], &[("SIFTLAB_PYTHON", "/no/such/python3")]);
+    let o = mark_with(&fixture("good"), &["-n", "1"], &[("SIFTLAB_PYTHON", "/no/such/python3")]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("/no/such/python3 not found"), "{}", stderr(&o));
     let o = Command::new(env!("CARGO_BIN_EXE_siftlab"))
@@ -64,11 +64,11 @@ fn what_cannot_be_marked_exits_2() {
 /// bubblewrap the marker refuses (exit 2) and names the way out.
 #[test]
 fn the_sandbox_is_required_unless_waived() {
-    let (o, _) = mark_with(&fixture("good"), &["-n", "1", "--no-sandbox"], &[]);
+    let o = mark_with(&fixture("good"), &["-n", "1", "--no-sandbox"], &[]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(stderr(&o).contains("--no-sandbox: the file runs with your own rights"), "{}", stderr(&o));
     assert!(stderr(&o).contains("NOT sandboxed"), "{}", stderr(&o));
-    let (o, _) = mark_with(&fixture("good"), &["-n", "1"], &[]);
+    let o = mark_with(&fixture("good"), &["-n", "1"], &[]);
     assert!(stderr(&o).contains("sandboxed (bubblewrap)"), "{}", stderr(&o));
     // No bwrap on the PATH (python3 named by its own path): refused, nothing run.
     let probe = Command::new("python3")
@@ -80,7 +80,7 @@ fn the_sandbox_is_required_unless_waived() {
     fs::create_dir_all(&empty).unwrap();
     // SIFTLAB_SANDBOX=bubblewrap: nothing weaker is taken.
     let path = ("PATH", empty.to_str().unwrap());
-    let (o, _) = mark_with(
+    let o = mark_with(
         &fixture("good"),
         &["-n", "1"],
         &[path, ("SIFTLAB_PYTHON", &python), ("SIFTLAB_SANDBOX", "bubblewrap")],
@@ -92,7 +92,7 @@ fn the_sandbox_is_required_unless_waived() {
     assert!(stdout(&o).is_empty(), "{}", stdout(&o));
     // Otherwise, as root (a platform's container), the container tier runs
     // the file with an interpreter every user may run; not as root, refused.
-    let (o, _) = mark_with(&fixture("good"), &["-n", "1"], &[path, ("SIFTLAB_PYTHON", "/usr/bin/python3")]);
+    let o = mark_with(&fixture("good"), &["-n", "1"], &[path, ("SIFTLAB_PYTHON", "/usr/bin/python3")]);
     // SAFETY: geteuid has no preconditions.
     if unsafe { libc::geteuid() } == 0 {
         assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
