@@ -130,7 +130,7 @@ fn float64_distances() {
 /// error; the harness is started again and the next case (matching_info on
 /// the same pair, sent again) is marked. Nothing waits around meanwhile: the
 /// run's idle time (none of its processes running or waiting for a CPU) stays
-/// under 5 s, whatever else loads the machine (its wall time does not: 20 s
+/// under 5 s, whatever else loads the machine (its wall time does not: 13 s
 /// quiet, 42 s beside the rest of CI on a 2-core machine).
 #[test]
 fn endless_loop_is_stopped_at_10_s() {
