@@ -9,15 +9,14 @@
 //! (a grace period, a wall-clock backstop instead of the CPU limit, a
 //! harness that is never restarted), is idle time.
 
-use std::collections::{HashMap, HashSet};
 use std::fs;
 use std::process::{Command, Output};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-/// Sampling period: fine enough for a bound of seconds, cheap enough (one
-/// pass over /proc) not to load the machine it measures.
+/// Sampling period: fine enough for a bound of seconds, cheap enough (a walk
+/// of a handful of processes) not to load the machine it measures.
 const PERIOD: Duration = Duration::from_millis(100);
 
 /// What one run took.
@@ -68,46 +67,30 @@ pub fn run(cmd: &mut Command) -> Watched {
 }
 
 /// Whether any thread of `root` or of its descendants is running, runnable
-/// or in an uninterruptible (disk) wait; `None` once `root` has ended.
+/// or in an uninterruptible (disk) wait; `None` once `root` has ended. The
+/// tree is walked from `root` down (each thread's `children`, as siftlab's
+/// own meter walks it), not found in a scan of all of /proc.
 fn tree_busy(root: u32) -> Option<bool> {
-    let mut parent: HashMap<u32, u32> = HashMap::new();
-    for entry in fs::read_dir("/proc").ok()?.flatten() {
-        let Some(pid) = entry.file_name().to_str().and_then(|s| s.parse::<u32>().ok()) else { continue };
-        if let Some((_, ppid)) = stat(&format!("/proc/{pid}/stat")) {
-            parent.insert(pid, ppid);
-        }
-    }
     // A zombie root (ended, not yet reaped) has no runnable thread either.
-    match stat(&format!("/proc/{root}/stat")) {
-        None | Some(('Z', _)) => return None,
-        _ => {}
+    if matches!(state(&format!("/proc/{root}/stat")), None | Some('Z')) {
+        return None;
     }
-    let mut tree = HashSet::from([root]);
-    let mut grew = true;
-    while grew {
-        grew = false;
-        for (&pid, ppid) in &parent {
-            if tree.contains(ppid) && tree.insert(pid) {
-                grew = true;
-            }
+    let (mut stack, mut busy) = (vec![root], false);
+    while let Some(pid) = stack.pop() {
+        for task in fs::read_dir(format!("/proc/{pid}/task")).into_iter().flatten().flatten() {
+            let path = task.path();
+            busy |= matches!(state(&path.join("stat").to_string_lossy()), Some('R' | 'D'));
+            let children = fs::read_to_string(path.join("children")).unwrap_or_default();
+            stack.extend(children.split_whitespace().filter_map(|c| c.parse::<u32>().ok()));
         }
     }
-    let busy = tree.iter().any(|pid| {
-        fs::read_dir(format!("/proc/{pid}/task")).into_iter().flatten().flatten().any(|t| {
-            let path = t.path().join("stat");
-            matches!(stat(path.to_str().unwrap_or_default()), Some(('R' | 'D', _)))
-        })
-    });
     Some(busy)
 }
 
-/// (state, parent pid) from a /proc stat file; the command name in
-/// parentheses may itself hold spaces and parentheses, so it is skipped from
-/// its last ')'.
-fn stat(path: &str) -> Option<(char, u32)> {
+/// The state letter of a /proc stat file; the command name before it, in
+/// parentheses, may itself hold spaces and parentheses, so it is read from
+/// the last ')'.
+fn state(path: &str) -> Option<char> {
     let s = fs::read_to_string(path).ok()?;
-    let mut rest = s[s.rfind(')')? + 1..].split_whitespace();
-    let state = rest.next()?.chars().next()?;
-    let ppid = rest.next()?.parse().ok()?;
-    Some((state, ppid))
+    s[s.rfind(')')? + 1..].split_whitespace().next()?.chars().next()
 }
